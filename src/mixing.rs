@@ -1,0 +1,149 @@
+//! Motor mixing into virtual actuators (seed Eq. 19–21).
+//!
+//! δ = M_ix Ω and δ² = M_ix Ω² with the rows of Eq. 20:
+//! `[1/N …]` (thrust δt), `[−y_i …]` (aileron δa), `[x_i …]` (elevator δe) and
+//! `[−σ_i …]` (rudder δr). The same matrix maps rotor accelerations Ω̇ to δ̇, which the
+//! J_z δ̇r term of Eq. 22f needs.
+
+use crate::vehicle::Vehicle;
+
+/// Index of a virtual actuator in the arrays returned here (row of Eq. 20).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VirtualActuator {
+    /// δt, mean rotor speed (rad/s) or mean squared speed (rad²/s²).
+    Thrust = 0,
+    /// δa = −Σ y_i Ω_i (m rad/s), or with Ω_i².
+    Aileron = 1,
+    /// δe = Σ x_i Ω_i (m rad/s), or with Ω_i².
+    Elevator = 2,
+    /// δr = −Σ σ_i Ω_i (rad/s), or with Ω_i².
+    Rudder = 3,
+}
+
+/// The mixing matrix M_ix of Eq. 20 (4 × N).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mixing {
+    /// Row-major 4 × N: rows δt, δa, δe, δr.
+    rows: [Vec<f64>; 4],
+}
+
+impl Mixing {
+    /// M_ix of a vehicle (Eq. 20).
+    pub fn new(vehicle: &Vehicle) -> Self {
+        let n = vehicle.rotor_count() as f64;
+        let r = vehicle.rotors();
+        Self {
+            rows: [
+                r.iter().map(|_| 1.0 / n).collect(),
+                r.iter().map(|r| -r.y).collect(),
+                r.iter().map(|r| r.x).collect(),
+                r.iter().map(|r| -r.spin).collect(),
+            ],
+        }
+    }
+
+    /// Row `a` of M_ix: the weight of each rotor in virtual actuator `a`.
+    pub fn row(&self, a: VirtualActuator) -> &[f64] {
+        &self.rows[a as usize]
+    }
+
+    /// Rotor count N.
+    pub fn rotor_count(&self) -> usize {
+        self.rows[0].len()
+    }
+
+    /// δ = M_ix Ω (Eq. 21) for rotor speeds Ω (rad/s): `[δt, δa, δe, δr]`.
+    /// Also gives δ̇ from Ω̇ (rad/s²), since M_ix is constant.
+    pub fn actuators(&self, omega: &[f64]) -> [f64; 4] {
+        self.rows.each_ref().map(|row| dot(row, omega))
+    }
+
+    /// δ² = M_ix Ω² (Eq. 19) for rotor speeds Ω (rad/s): `[δ²t, δ²a, δ²e, δ²r]`.
+    pub fn squared_actuators(&self, omega: &[f64]) -> [f64; 4] {
+        self.rows
+            .each_ref()
+            .map(|row| row.iter().zip(omega).map(|(m, w)| m * w * w).sum())
+    }
+
+    /// Batch form of [`Mixing::actuators`]: `out[a][k] = Σ_i M_ix[a][i] · x_i[k]` for rotor
+    /// series `x_i` (one slice per rotor, all of length `out[a].len()`). With `square`,
+    /// uses x_i[k]² (Eq. 19). Writes without allocating.
+    pub fn mix_into<S: AsRef<[f64]>>(
+        &self,
+        rotor_series: &[S],
+        square: bool,
+        out: [&mut [f64]; 4],
+    ) {
+        for (row, dst) in self.rows.iter().zip(out) {
+            mix_row(row, rotor_series, square, dst);
+        }
+    }
+}
+
+/// `dst[k] = Σ_i weights[i] · x_i[k]` (or `x_i[k]²`), vectorisable inner loops.
+pub fn mix_row<S: AsRef<[f64]>>(
+    weights: &[f64],
+    rotor_series: &[S],
+    square: bool,
+    dst: &mut [f64],
+) {
+    dst.fill(0.0);
+    for (&m, x) in weights.iter().zip(rotor_series) {
+        if m == 0.0 {
+            continue;
+        }
+        let x = &x.as_ref()[..dst.len()];
+        if square {
+            for (d, &w) in dst.iter_mut().zip(x) {
+                *d += m * w * w;
+            }
+        } else {
+            for (d, &w) in dst.iter_mut().zip(x) {
+                *d += m * w;
+            }
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vehicle::{MassAndRotorProperties, Preset};
+
+    #[test]
+    fn quad_x_mixing_matches_eq_20_by_hand() {
+        let props = MassAndRotorProperties {
+            mass: 1.0,
+            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
+            air_density: 1.225,
+            rotor_radius: 0.1,
+            hub_height: 0.0,
+            rotor_inertia: 0.0,
+        };
+        let v = Vehicle::preset("q", Preset::QuadX, 2f64.sqrt(), 1.0, props).unwrap();
+        // Rotors at (±1, ±1) m: 1 FR(+), 2 RR(−), 3 RL(+), 4 FL(−) (azimuth order).
+        let m = Mixing::new(&v);
+        let omega = [100.0, 200.0, 300.0, 400.0];
+        let d = m.actuators(&omega);
+        // y = (1, 1, −1, −1), x = (1, −1, −1, 1), σ = (+, −, +, −).
+        let expect = [250.0, 400.0, 0.0, 200.0];
+        for (a, b) in d.iter().zip(expect) {
+            assert!((a - b).abs() < 1e-9, "{d:?} vs {expect:?}");
+        }
+        let d2 = m.squared_actuators(&omega);
+        assert!((d2[0] - (1e4 + 4e4 + 9e4 + 16e4) / 4.0).abs() < 1e-6);
+        // Batch form equals the per-sample form.
+        let series: Vec<Vec<f64>> = omega.iter().map(|&w| vec![w, 2.0 * w]).collect();
+        let refs: Vec<&[f64]> = series.iter().map(|s| s.as_slice()).collect();
+        let mut out = [[0.0; 2]; 4];
+        let [a, b, c, e] = &mut out;
+        m.mix_into(&refs, true, [a, b, c, e]);
+        for (k, row) in out.iter().enumerate() {
+            assert!((row[0] - d2[k]).abs() < 1e-6 && (row[1] - 4.0 * d2[k]).abs() < 1e-6);
+        }
+    }
+}

@@ -1,0 +1,950 @@
+//! The Eq. 22 model structure: named lumped parameters shared across the six axes, and
+//! the regressor columns each parameter multiplies (seed §4.2).
+//!
+//! A [`ModelStructure`] is data: one parameter vector θ and, per axis, a sparse row of
+//! [`Column`]s. Each column is a sum of [`Term`]s `coef · s1 · s2 · …`, products of
+//! per-sample [`Signal`]s (states, virtual actuators, inflow sums) with constant
+//! coefficients that carry ρπR², R, N, ν0, ℓ and h. Eq. 22 reads
+//! `z_axis = Σ_columns θ[column.param] · column(sample)`.
+//!
+//! Terms with known coefficients (the J_z gyroscopic and motor-torque terms of
+//! Eq. 16/22d–f) are either moved to the output side ([`RotorInertiaTerms::Known`]),
+//! estimated as parameter `J_z`, or neglected.
+//!
+//! The inflow corrections Δν_z, Δν_ℒ, Δν_ℳ, Δν_𝒩, Δν_𝒩² come from per-rotor sums
+//! ([`InflowCorrection::Derived`], default): with hub local vertical velocity
+//! w_i = w + p y_i − q x_i (Eq. 18),
+//!
+//! - Δν_z = −Σ (w_i − w) Ω_i = p δa + q δe,
+//! - Δν_ℒ = p Σ y_i² Ω_i − q Σ x_i y_i Ω_i,
+//! - Δν_ℳ = q Σ x_i² Ω_i − p Σ x_i y_i Ω_i,
+//! - Δν_𝒩 = p Σ σ_i y_i Ω_i − q Σ σ_i x_i Ω_i,
+//! - N ℓ² Δν_𝒩² = −(p² Σ σ_i y_i² − 2pq Σ σ_i x_i y_i + q² Σ σ_i x_i²),
+//!
+//! and the M_z term of C_H_mub_muw is v(pΣx_iy_i − qΣx_i²) − u(pΣy_i² − qΣx_iy_i),
+//! which equals the printed −½Nℓ²(up + vq) under Assumption 2.
+//!
+//! [`InflowCorrection::Paper`] reproduces the printed case table of Eq. 22 instead.
+//! By the sums above, the printed table is not consistent with any single spin
+//! assignment: for quadrotor× the printed Δν_ℒ, Δν_ℳ and Δν_𝒩² hold when rotor 1 at
+//! (ℓ√2/2, ℓ√2/2) has σ = +1, while the printed Δν_𝒩 = −pδe − qδa holds for σ = −1 (the
+//! sums give +pδe + qδa for σ = +1); for quadrotor+ the printed Δν_ℒ, Δν_ℳ and Δν_𝒩 hold
+//! for σ = −1 at the front rotor while Δν_𝒩² holds for σ = +1. The multirotor≥6 forms
+//! replace Σ y_i² Ω_i by (ℓ²/2) N δt and drop Σ x_i y_i Ω_i and Δν_𝒩, which is exact
+//! only when all rotor speeds are equal.
+
+use crate::mixing::{Mixing, mix_row};
+use crate::sample::{Axis, Sample, SampleChunk};
+use crate::vehicle::{ConfigurationClass, Vehicle};
+
+/// A per-sample quantity that regressor terms multiply.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Signal {
+    /// Body velocity u, m/s.
+    U,
+    /// Body velocity v, m/s.
+    V,
+    /// Body velocity w, m/s.
+    W,
+    /// Roll rate p, rad/s.
+    P,
+    /// Pitch rate q, rad/s.
+    Q,
+    /// Yaw rate r, rad/s.
+    R,
+    /// Rotor-plane airspeed V_h = √(u² + v²), m/s (Eq. 2b).
+    Vh,
+    /// Virtual thrust δt (Eq. 21), rad/s.
+    Dt,
+    /// Virtual aileron δa (Eq. 21), m rad/s.
+    Da,
+    /// Virtual elevator δe (Eq. 21), m rad/s.
+    De,
+    /// Virtual rudder δr (Eq. 21), rad/s.
+    Dr,
+    /// δ²t (Eq. 19), rad²/s².
+    D2t,
+    /// δ²a (Eq. 19), m rad²/s².
+    D2a,
+    /// δ²e (Eq. 19), m rad²/s².
+    D2e,
+    /// δ²r (Eq. 19), rad²/s².
+    D2r,
+    /// Rate of the virtual rudder δ̇r = M_ix,r Ω̇, rad/s².
+    DrDot,
+    /// Σ y_i² Ω_i, m² rad/s.
+    SumY2Omega,
+    /// Σ x_i y_i Ω_i, m² rad/s.
+    SumXYOmega,
+    /// Σ x_i² Ω_i, m² rad/s.
+    SumX2Omega,
+    /// Σ σ_i y_i Ω_i, m rad/s.
+    SumSigmaYOmega,
+    /// Σ σ_i x_i Ω_i, m rad/s.
+    SumSigmaXOmega,
+}
+
+/// Number of [`Signal`] variants.
+pub const SIGNAL_COUNT: usize = 21;
+
+impl Signal {
+    /// ASCII symbol used in column labels.
+    pub fn symbol(self) -> &'static str {
+        use Signal::*;
+        match self {
+            U => "u",
+            V => "v",
+            W => "w",
+            P => "p",
+            Q => "q",
+            R => "r",
+            Vh => "Vh",
+            Dt => "dt",
+            Da => "da",
+            De => "de",
+            Dr => "dr",
+            D2t => "d2t",
+            D2a => "d2a",
+            D2e => "d2e",
+            D2r => "d2r",
+            DrDot => "dr_dot",
+            SumY2Omega => "Sum(y^2 W)",
+            SumXYOmega => "Sum(xy W)",
+            SumX2Omega => "Sum(x^2 W)",
+            SumSigmaYOmega => "Sum(s y W)",
+            SumSigmaXOmega => "Sum(s x W)",
+        }
+    }
+}
+
+/// One product `coef · Π factors` inside a regressor column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Term {
+    /// Constant coefficient (carries ρπR², R, N, ν0, ℓ, h as the column needs).
+    pub coef: f64,
+    /// Signals multiplied together (empty: the constant `coef`).
+    pub factors: Vec<Signal>,
+}
+
+/// `coef · Π factors`.
+pub fn term(coef: f64, factors: &[Signal]) -> Term {
+    Term {
+        coef,
+        factors: factors.to_vec(),
+    }
+}
+
+/// A regressor column: which axis, which parameter it multiplies, and its terms.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    /// Output axis.
+    pub axis: Axis,
+    /// Index into [`ModelStructure::params`].
+    pub param: usize,
+    /// ASCII description of the regressor, after Eq. 22 (e.g. `u*dt`).
+    pub label: String,
+    /// Terms summed into the column.
+    pub terms: Vec<Term>,
+}
+
+/// A named lumped parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    /// ASCII name after the seed, e.g. `C_H_mub_mu0`.
+    pub name: String,
+    /// Unit of the estimate ("-" for the dimensionless coefficients of Eq. 8).
+    pub unit: String,
+}
+
+/// How the inflow-correction terms are built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum InflowCorrection {
+    /// From per-rotor sums over the vehicle's positions and spins (exact for any
+    /// Assumption 2 layout and spin assignment).
+    #[default]
+    Derived,
+    /// The printed case table of Eq. 22, to reproduce the seed.
+    Paper,
+}
+
+/// Treatment of the J_z gyroscopic and motor-torque terms (Eq. 16).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RotorInertiaTerms {
+    /// J_z from the vehicle file; the terms are subtracted from the measured moments.
+    #[default]
+    Known,
+    /// J_z is estimated as a parameter (unit kg m²).
+    Estimated,
+    /// The terms are left out.
+    Neglected,
+}
+
+/// Variant of the Eq. 22 structure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModelOptions {
+    /// Inflow-correction form.
+    pub inflow: InflowCorrection,
+    /// Keep the terms linear in V_h (C_H_mub_mu, C_T_mu, C_Q_mu). The seed's simulation
+    /// study removed them (constant-inflow simulator).
+    pub linear_vh_terms: bool,
+    /// J_z term treatment.
+    pub rotor_inertia: RotorInertiaTerms,
+}
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        Self {
+            inflow: InflowCorrection::Derived,
+            linear_vh_terms: true,
+            rotor_inertia: RotorInertiaTerms::Known,
+        }
+    }
+}
+
+impl ModelOptions {
+    /// The variant of the seed's simulation study (§5): printed inflow table, no terms
+    /// linear in V_h.
+    pub fn paper_simulation_study() -> Self {
+        Self {
+            inflow: InflowCorrection::Paper,
+            linear_vh_terms: false,
+            rotor_inertia: RotorInertiaTerms::Known,
+        }
+    }
+}
+
+/// Why a chunk could not be assembled.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// The chunk has a different rotor count from the vehicle.
+    #[error("the data has {found} rotor speed columns but the vehicle has {expected} rotors")]
+    RotorCountMismatch {
+        /// Vehicle rotor count.
+        expected: usize,
+        /// Rotor series in the data.
+        found: usize,
+    },
+    /// The model needs rotor accelerations (J_z δ̇r term) and the data has none.
+    #[error(
+        "the model needs rotor accelerations (the J_z * dr_dot term of Eq. 22f) but the data has none; derive them, or neglect the J_z terms"
+    )]
+    MissingRotorAcceleration,
+}
+
+/// The Eq. 22 model of one vehicle: parameters, columns per axis and known terms.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelStructure {
+    /// Parameters, in estimation order.
+    pub params: Vec<Parameter>,
+    /// All regressor columns, grouped by axis in [`Axis`] order.
+    pub columns: Vec<Column>,
+    /// Known-coefficient terms per axis, subtracted from the measured outputs.
+    pub known: [Vec<Term>; 6],
+    /// The options the structure was built with.
+    pub options: ModelOptions,
+    rotor_count: usize,
+    mixing: Mixing,
+    inflow_weights: [Vec<f64>; 5],
+}
+
+/// Constants of one vehicle that the Eq. 22 coefficients use.
+struct Consts {
+    /// ρπR², kg/m.
+    k: f64,
+    r: f64,
+    n: f64,
+    nu0: f64,
+    l2: f64,
+    h: f64,
+    /// Smallest geometric coefficient kept, m² (smaller ones are rounding noise).
+    tiny: f64,
+}
+
+/// Builds columns for one parameter, skipping terms whose coefficient is rounding noise.
+struct Builder {
+    params: Vec<Parameter>,
+    columns: Vec<Column>,
+}
+
+impl Builder {
+    fn param(&mut self, name: &str, unit: &str) -> usize {
+        if let Some(i) = self.params.iter().position(|p| p.name == name) {
+            return i;
+        }
+        self.params.push(Parameter {
+            name: name.into(),
+            unit: unit.into(),
+        });
+        self.params.len() - 1
+    }
+
+    fn col(&mut self, axis: Axis, param: &str, label: &str, terms: Vec<Term>) {
+        let terms: Vec<Term> = terms.into_iter().filter(|t| t.coef != 0.0).collect();
+        if terms.is_empty() {
+            return;
+        }
+        let unit = if param == "J_z" { "kg m^2" } else { "-" };
+        let param = self.param(param, unit);
+        self.columns.push(Column {
+            axis,
+            param,
+            label: label.into(),
+            terms,
+        });
+    }
+}
+
+impl ModelStructure {
+    /// The Eq. 22 structure for `vehicle` with `options`.
+    pub fn eq22(vehicle: &Vehicle, options: ModelOptions) -> Self {
+        let props = &vehicle.props;
+        let r = props.rotor_radius;
+        let l2 = vehicle.arm_length().powi(2);
+        let n = vehicle.rotor_count() as f64;
+        let c = Consts {
+            k: props.air_density * std::f64::consts::PI * r * r,
+            r,
+            n,
+            nu0: vehicle.hover_induced_velocity(),
+            l2,
+            h: props.hub_height,
+            tiny: 1e-12 * n * l2,
+        };
+        let geometry = Geometry::of(vehicle, c.tiny);
+        let mut b = Builder {
+            params: Vec::new(),
+            columns: Vec::new(),
+        };
+        in_plane_forces(&mut b, &c, options);
+        vertical_force(&mut b, &c, options);
+        roll_pitch_moments(&mut b, &c, options, vehicle.class());
+        yaw_moment(&mut b, &c, options, vehicle.class(), &geometry);
+        let known = rotor_inertia_terms(&mut b, options, props.rotor_inertia);
+        b.columns.sort_by_key(|col| col.axis);
+        // Parameters in order of first appearance by axis, as in Table 5.
+        let mut order: Vec<usize> = Vec::new();
+        for col in &b.columns {
+            if !order.contains(&col.param) {
+                order.push(col.param);
+            }
+        }
+        let params = order.iter().map(|&i| b.params[i].clone()).collect();
+        for col in &mut b.columns {
+            col.param = order.iter().position(|&i| i == col.param).expect("present");
+        }
+        let rotors = vehicle.rotors();
+        let clean = |w: f64| if w.abs() <= c.tiny { 0.0 } else { w };
+        let inflow_weights = [
+            rotors.iter().map(|r| clean(r.y * r.y)).collect(),
+            rotors.iter().map(|r| clean(r.x * r.y)).collect(),
+            rotors.iter().map(|r| clean(r.x * r.x)).collect(),
+            rotors.iter().map(|r| clean(r.spin * r.y)).collect(),
+            rotors.iter().map(|r| clean(r.spin * r.x)).collect(),
+        ];
+        Self {
+            params,
+            columns: b.columns,
+            known,
+            options,
+            rotor_count: vehicle.rotor_count(),
+            mixing: Mixing::new(vehicle),
+            inflow_weights,
+        }
+    }
+
+    /// Index of the parameter called `name`.
+    pub fn param_index(&self, name: &str) -> Option<usize> {
+        self.params.iter().position(|p| p.name == name)
+    }
+
+    /// Indices (into [`ModelStructure::columns`]) of the columns of `axis`.
+    pub fn axis_columns(&self, axis: Axis) -> impl Iterator<Item = usize> + '_ {
+        self.columns
+            .iter()
+            .enumerate()
+            .filter(move |(_, c)| c.axis == axis)
+            .map(|(j, _)| j)
+    }
+
+    /// Rotor count the structure was built for.
+    pub fn rotor_count(&self) -> usize {
+        self.rotor_count
+    }
+
+    /// True when assembling needs rotor accelerations.
+    pub fn needs_omega_dot(&self) -> bool {
+        self.all_terms().any(|t| t.factors.contains(&Signal::DrDot))
+    }
+
+    fn all_terms(&self) -> impl Iterator<Item = &Term> {
+        self.columns
+            .iter()
+            .flat_map(|c| c.terms.iter())
+            .chain(self.known.iter().flatten())
+    }
+
+    /// The signals any column or known term uses, sorted.
+    pub fn required_signals(&self) -> Vec<Signal> {
+        let mut s: Vec<Signal> = self
+            .all_terms()
+            .flat_map(|t| t.factors.iter().copied())
+            .collect();
+        s.sort();
+        s.dedup();
+        s
+    }
+
+    /// Appends a parameter with its columns (e.g. a candidate effect); returns its index.
+    /// Columns' `param` fields are overwritten with the new index.
+    pub fn add_parameter(&mut self, param: Parameter, mut columns: Vec<Column>) -> usize {
+        let idx = self.params.len();
+        self.params.push(param);
+        for c in &mut columns {
+            c.param = idx;
+        }
+        self.columns.extend(columns);
+        self.columns.sort_by_key(|c| c.axis);
+        idx
+    }
+
+    /// Checks that `chunk` can be assembled with this structure.
+    pub fn check_chunk(&self, chunk: &SampleChunk) -> Result<(), ModelError> {
+        if chunk.rotor_count() != self.rotor_count {
+            return Err(ModelError::RotorCountMismatch {
+                expected: self.rotor_count,
+                found: chunk.rotor_count(),
+            });
+        }
+        if self.needs_omega_dot() && !chunk.has_omega_dot() {
+            return Err(ModelError::MissingRotorAcceleration);
+        }
+        Ok(())
+    }
+
+    /// Assembles all regressor columns and the known-term-corrected outputs of `chunk`
+    /// into `ws` (column-major, reused across chunks; allocates only when a chunk is
+    /// longer than any before).
+    pub fn assemble(&self, chunk: &SampleChunk, ws: &mut Workspace) -> Result<(), ModelError> {
+        self.check_chunk(chunk)?;
+        let n = chunk.len();
+        ws.prepare(n, self.columns.len());
+        for s in self.required_signals() {
+            self.compute_signal(s, chunk, ws);
+        }
+        let Workspace {
+            signals,
+            columns,
+            outputs,
+            capacity,
+            ..
+        } = ws;
+        let cap = *capacity;
+        let lookup = |s: Signal| signal_slice(s, chunk, signals, cap, n);
+        for (j, col) in self.columns.iter().enumerate() {
+            let dst = &mut columns[j * cap..j * cap + n];
+            for (i, t) in col.terms.iter().enumerate() {
+                apply_term(dst, t, i == 0, &lookup);
+            }
+        }
+        for axis in Axis::ALL {
+            let a = axis as usize;
+            let dst = &mut outputs[a * cap..a * cap + n];
+            dst.copy_from_slice(&chunk.wrench[a][..n]);
+            for t in &self.known[a] {
+                let neg = Term {
+                    coef: -t.coef,
+                    factors: t.factors.clone(),
+                };
+                apply_term(dst, &neg, false, &lookup);
+            }
+        }
+        Ok(())
+    }
+
+    fn compute_signal(&self, s: Signal, chunk: &SampleChunk, ws: &mut Workspace) {
+        use crate::mixing::VirtualActuator as A;
+        use Signal::*;
+        let n = chunk.len();
+        let cap = ws.capacity;
+        let dst = &mut ws.signals[s as usize * cap..s as usize * cap + n];
+        match s {
+            U | V | W | P | Q | R => {}
+            Vh => {
+                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
+                for ((d, &a), &b) in dst.iter_mut().zip(u).zip(v) {
+                    *d = (a * a + b * b).sqrt();
+                }
+            }
+            Dt | Da | De | Dr | D2t | D2a | D2e | D2r => {
+                let (row, square) = match s {
+                    Dt => (A::Thrust, false),
+                    Da => (A::Aileron, false),
+                    De => (A::Elevator, false),
+                    Dr => (A::Rudder, false),
+                    D2t => (A::Thrust, true),
+                    D2a => (A::Aileron, true),
+                    D2e => (A::Elevator, true),
+                    _ => (A::Rudder, true),
+                };
+                mix_row(self.mixing.row(row), &chunk.omega, square, dst);
+            }
+            DrDot => {
+                mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst);
+            }
+            SumY2Omega | SumXYOmega | SumX2Omega | SumSigmaYOmega | SumSigmaXOmega => {
+                let w = &self.inflow_weights[s as usize - SumY2Omega as usize];
+                mix_row(w, &chunk.omega, false, dst);
+            }
+        }
+    }
+
+    /// Model output ŷ = Σ θ[param] · column for one sample, plus the known terms:
+    /// `[F_x, F_y, F_z, M_x, M_y, M_z]` in N and N m.
+    pub fn predict(&self, theta: &[f64], sample: &Sample) -> Result<[f64; 6], ModelError> {
+        let mut chunk =
+            SampleChunk::with_capacity(sample.omega.len(), 1, !sample.omega_dot.is_empty());
+        chunk.push(sample);
+        let mut ws = Workspace::default();
+        self.assemble(&chunk, &mut ws)?;
+        let mut y = [0.0; 6];
+        for (j, col) in self.columns.iter().enumerate() {
+            y[col.axis as usize] += theta[col.param] * ws.column(j)[0];
+        }
+        for axis in Axis::ALL {
+            let a = axis as usize;
+            // known part = measured − corrected output
+            y[a] += chunk.wrench[a][0] - ws.output(axis)[0];
+        }
+        Ok(y)
+    }
+}
+
+/// Geometric sums of the rotor layout, m².
+struct Geometry {
+    sxx: f64,
+    syy: f64,
+    sxy: f64,
+    s_sigma_xx: f64,
+    s_sigma_yy: f64,
+    s_sigma_xy: f64,
+}
+
+impl Geometry {
+    fn of(vehicle: &Vehicle, tiny: f64) -> Self {
+        let sum = |f: &dyn Fn(&crate::vehicle::Rotor) -> f64| {
+            let s: f64 = vehicle.rotors().iter().map(f).sum();
+            if s.abs() <= tiny { 0.0 } else { s }
+        };
+        Self {
+            sxx: sum(&|r| r.x * r.x),
+            syy: sum(&|r| r.y * r.y),
+            sxy: sum(&|r| r.x * r.y),
+            s_sigma_xx: sum(&|r| r.spin * r.x * r.x),
+            s_sigma_yy: sum(&|r| r.spin * r.y * r.y),
+            s_sigma_xy: sum(&|r| r.spin * r.x * r.y),
+        }
+    }
+}
+
+/// Eq. 22a–b: F_x, F_y = ρπR² N {u, v} (−C_H_mub R δt − C_H_mub_mu0 ν0 − C_H_mub_mu V_h
+/// + C_H_mub_muw w).
+fn in_plane_forces(b: &mut Builder, c: &Consts, o: ModelOptions) {
+    use Signal::*;
+    let kn = c.k * c.n;
+    for (axis, s, name) in [(Axis::Fx, U, "u"), (Axis::Fy, V, "v")] {
+        b.col(
+            axis,
+            "C_H_mub",
+            &format!("{name}*dt"),
+            vec![term(-kn * c.r, &[s, Dt])],
+        );
+        b.col(
+            axis,
+            "C_H_mub_mu0",
+            &format!("{name}*nu0"),
+            vec![term(-kn * c.nu0, &[s])],
+        );
+        if o.linear_vh_terms {
+            b.col(
+                axis,
+                "C_H_mub_mu",
+                &format!("{name}*Vh"),
+                vec![term(-kn, &[s, Vh])],
+            );
+        }
+        b.col(
+            axis,
+            "C_H_mub_muw",
+            &format!("{name}*w"),
+            vec![term(kn, &[s, W])],
+        );
+    }
+}
+
+/// Eq. 22c: F_z.
+fn vertical_force(b: &mut Builder, c: &Consts, o: ModelOptions) {
+    use Signal::*;
+    let (k, r, n) = (c.k, c.r, c.n);
+    b.col(Axis::Fz, "C_T0", "d2t", vec![term(-k * r * r * n, &[D2t])]);
+    b.col(
+        Axis::Fz,
+        "C_T_mu0",
+        "nu0*dt",
+        vec![term(k * r * n * c.nu0, &[Dt])],
+    );
+    if o.linear_vh_terms {
+        b.col(
+            Axis::Fz,
+            "C_T_mu",
+            "Vh*dt",
+            vec![term(k * r * n, &[Vh, Dt])],
+        );
+    }
+    b.col(Axis::Fz, "C_T_mu2", "Vh^2", vec![term(-k * n, &[Vh, Vh])]);
+    // −C_T_muw R (N w δt − Δν_z), Δν_z = p δa + q δe.
+    b.col(
+        Axis::Fz,
+        "C_T_muw",
+        "N*w*dt - dnu_z",
+        vec![
+            term(-k * r * n, &[W, Dt]),
+            term(k * r, &[P, Da]),
+            term(k * r, &[Q, De]),
+        ],
+    );
+}
+
+/// Eq. 22d–e: M_x and M_y.
+fn roll_pitch_moments(b: &mut Builder, c: &Consts, o: ModelOptions, class: ConfigurationClass) {
+    use Signal::*;
+    let (k, r, n, h) = (c.k, c.r, c.n, c.h);
+    // (axis, rotor-moment velocity, virtual actuator δ, δ², hub-force velocity, sign of
+    // the hub-force moment: M_x gets +h ΣS = h F_y, M_y gets +h ΣH = −h F_x).
+    let axes = [
+        (Axis::Mx, U, Da, D2a, V, 1.0, "a", "u", "v"),
+        (Axis::My, V, De, D2e, U, -1.0, "e", "v", "u"),
+    ];
+    for (axis, vr, d, d2, vh, sign, dn, vrn, vhn) in axes {
+        b.col(
+            axis,
+            "C_R_mub",
+            &format!("{vrn}*dr"),
+            vec![term(k * r * r, &[vr, Dr])],
+        );
+        b.col(
+            axis,
+            "C_T0",
+            &format!("d2{dn}"),
+            vec![term(k * r * r, &[d2])],
+        );
+        b.col(
+            axis,
+            "C_T_mu0",
+            &format!("nu0*d{dn}"),
+            vec![term(-k * r * c.nu0, &[d])],
+        );
+        if o.linear_vh_terms {
+            b.col(
+                axis,
+                "C_T_mu",
+                &format!("Vh*d{dn}"),
+                vec![term(-k * r, &[Vh, d])],
+            );
+        }
+        let mut muw = vec![term(k * r, &[W, d])];
+        muw.extend(inflow_roll_pitch(axis, c, o.inflow, class));
+        let label = if axis == Axis::Mx {
+            "w*da - dnu_L"
+        } else {
+            "w*de - dnu_M"
+        };
+        b.col(axis, "C_T_muw", label, muw);
+        let khn = sign * k * h * n;
+        b.col(
+            axis,
+            "C_H_mub",
+            &format!("h*{vhn}*dt"),
+            vec![term(-khn * r, &[vh, Dt])],
+        );
+        b.col(
+            axis,
+            "C_H_mub_mu0",
+            &format!("h*{vhn}*nu0"),
+            vec![term(-khn * c.nu0, &[vh])],
+        );
+        if o.linear_vh_terms {
+            b.col(
+                axis,
+                "C_H_mub_mu",
+                &format!("h*{vhn}*Vh"),
+                vec![term(-khn, &[vh, Vh])],
+            );
+        }
+        b.col(
+            axis,
+            "C_H_mub_muw",
+            &format!("h*{vhn}*w"),
+            vec![term(khn, &[vh, W])],
+        );
+    }
+}
+
+/// The −ρπR² C_T_muw R Δν_ℒ (M_x) or Δν_ℳ (M_y) terms.
+fn inflow_roll_pitch(
+    axis: Axis,
+    c: &Consts,
+    form: InflowCorrection,
+    class: ConfigurationClass,
+) -> Vec<Term> {
+    use Signal::*;
+    let kr = c.k * c.r;
+    let half = kr * c.l2 / 2.0;
+    let roll = axis == Axis::Mx;
+    match (form, roll) {
+        (InflowCorrection::Derived, true) => {
+            vec![term(-kr, &[P, SumY2Omega]), term(kr, &[Q, SumXYOmega])]
+        }
+        (InflowCorrection::Derived, false) => {
+            vec![term(-kr, &[Q, SumX2Omega]), term(kr, &[P, SumXYOmega])]
+        }
+        (InflowCorrection::Paper, _) => {
+            let (rate, other) = if roll { (P, Q) } else { (Q, P) };
+            let mut t = vec![term(-half * c.n, &[rate, Dt])];
+            match class {
+                // Δν_ℒ = ℓ²/2 p (N δt − δr); Δν_ℳ = ℓ²/2 q (N δt + δr).
+                ConfigurationClass::QuadPlus => {
+                    t.push(term(if roll { half } else { -half }, &[rate, Dr]))
+                }
+                // Δν_ℒ = ℓ²/2 (N p δt + q δr); Δν_ℳ = ℓ²/2 (N q δt + p δr).
+                ConfigurationClass::QuadX => t.push(term(-half, &[other, Dr])),
+                ConfigurationClass::Multirotor6Plus => {}
+            }
+            t
+        }
+    }
+}
+
+/// Eq. 22f: M_z.
+fn yaw_moment(
+    b: &mut Builder,
+    c: &Consts,
+    o: ModelOptions,
+    class: ConfigurationClass,
+    g: &Geometry,
+) {
+    use Signal::*;
+    let (k, r) = (c.k, c.r);
+    let kr2 = k * r * r;
+    b.col(Axis::Mz, "C_Q0", "d2r", vec![term(kr2 * r, &[D2r])]);
+    b.col(
+        Axis::Mz,
+        "C_Q_mu0",
+        "nu0*dr",
+        vec![term(kr2 * c.nu0, &[Dr])],
+    );
+    if o.linear_vh_terms {
+        b.col(Axis::Mz, "C_Q_mu", "Vh*dr", vec![term(kr2, &[Vh, Dr])]);
+    }
+    // −C_Q_muw R² (w δr − Δν_𝒩).
+    let mut muw = vec![term(-kr2, &[W, Dr])];
+    // −C_Q_muw2 R N ℓ² Δν_𝒩².
+    let muw2;
+    // C_H_mub_muw: v(pΣxy − qΣx²) − u(pΣy² − qΣxy), printed −½Nℓ²(up + vq).
+    let hw;
+    match o.inflow {
+        InflowCorrection::Derived => {
+            muw.extend([
+                term(kr2, &[P, SumSigmaYOmega]),
+                term(-kr2, &[Q, SumSigmaXOmega]),
+            ]);
+            muw2 = vec![
+                term(k * r * g.s_sigma_yy, &[P, P]),
+                term(-2.0 * k * r * g.s_sigma_xy, &[P, Q]),
+                term(k * r * g.s_sigma_xx, &[Q, Q]),
+            ];
+            hw = vec![
+                term(k * g.sxy, &[V, P]),
+                term(-k * g.sxx, &[V, Q]),
+                term(-k * g.syy, &[U, P]),
+                term(k * g.sxy, &[U, Q]),
+            ];
+        }
+        InflowCorrection::Paper => {
+            let knl2 = k * r * c.n * c.l2;
+            match class {
+                ConfigurationClass::QuadPlus => {
+                    muw.extend([term(kr2, &[Q, De]), term(-kr2, &[P, Da])]);
+                    muw2 = vec![term(-knl2 / 2.0, &[P, P]), term(knl2 / 2.0, &[Q, Q])];
+                }
+                ConfigurationClass::QuadX => {
+                    muw.extend([term(-kr2, &[P, De]), term(-kr2, &[Q, Da])]);
+                    muw2 = vec![term(-knl2, &[P, Q])];
+                }
+                ConfigurationClass::Multirotor6Plus => muw2 = Vec::new(),
+            }
+            let half = 0.5 * k * c.n * c.l2;
+            hw = vec![term(-half, &[U, P]), term(-half, &[V, Q])];
+        }
+    }
+    b.col(Axis::Mz, "C_Q_muw", "w*dr - dnu_N", muw);
+    b.col(Axis::Mz, "C_Q_muw2", "N*l^2*dnu_N2", muw2);
+    b.col(
+        Axis::Mz,
+        "C_H_mub",
+        "u*da + v*de",
+        vec![term(-k * r, &[U, Da]), term(-k * r, &[V, De])],
+    );
+    b.col(Axis::Mz, "C_H_mub_muw", "l^2*(u*p + v*q)", hw);
+}
+
+/// J_z q δr (M_x), −J_z p δr (M_y), J_z δ̇r (M_z): columns of `J_z` or known terms.
+fn rotor_inertia_terms(b: &mut Builder, o: ModelOptions, jz: f64) -> [Vec<Term>; 6] {
+    use Signal::*;
+    let shapes = [
+        (Axis::Mx, "q*dr", term(1.0, &[Q, Dr])),
+        (Axis::My, "-p*dr", term(-1.0, &[P, Dr])),
+        (Axis::Mz, "dr_dot", term(1.0, &[DrDot])),
+    ];
+    let mut known: [Vec<Term>; 6] = Default::default();
+    for (axis, label, t) in shapes {
+        match o.rotor_inertia {
+            RotorInertiaTerms::Estimated => b.col(axis, "J_z", label, vec![t]),
+            RotorInertiaTerms::Known if jz != 0.0 => known[axis as usize].push(Term {
+                coef: jz * t.coef,
+                factors: t.factors,
+            }),
+            _ => {}
+        }
+    }
+    known
+}
+
+/// The values of signal `s` for the `n` samples of `chunk`.
+fn signal_slice<'a>(
+    s: Signal,
+    chunk: &'a SampleChunk,
+    signals: &'a [f64],
+    cap: usize,
+    n: usize,
+) -> &'a [f64] {
+    use Signal::*;
+    match s {
+        U => &chunk.velocity[0][..n],
+        V => &chunk.velocity[1][..n],
+        W => &chunk.velocity[2][..n],
+        P => &chunk.rates[0][..n],
+        Q => &chunk.rates[1][..n],
+        R => &chunk.rates[2][..n],
+        _ => &signals[s as usize * cap..s as usize * cap + n],
+    }
+}
+
+/// `dst (=|+=) coef · Π factors`, one vectorisable loop per term.
+fn apply_term<'a>(dst: &mut [f64], t: &Term, first: bool, lookup: &impl Fn(Signal) -> &'a [f64]) {
+    let c = t.coef;
+    match (t.factors.as_slice(), first) {
+        ([], true) => dst.fill(c),
+        ([], false) => dst.iter_mut().for_each(|d| *d += c),
+        ([a], true) => zip1(dst, lookup(*a), |x| c * x),
+        ([a], false) => zip1_add(dst, lookup(*a), |x| c * x),
+        ([a, b], true) => zip2(dst, lookup(*a), lookup(*b), |x, y| c * x * y),
+        ([a, b], false) => zip2_add(dst, lookup(*a), lookup(*b), |x, y| c * x * y),
+        ([a, b, rest @ ..], _) => {
+            // Three or more factors: fold pairwise (rare; candidate effects only).
+            if first {
+                zip2(dst, lookup(*a), lookup(*b), |x, y| c * x * y);
+                for f in rest {
+                    zip1_mul(dst, lookup(*f));
+                }
+            } else {
+                let mut tmp: Vec<f64> = lookup(*a)
+                    .iter()
+                    .zip(lookup(*b))
+                    .map(|(x, y)| c * x * y)
+                    .collect();
+                for f in rest {
+                    zip1_mul(&mut tmp, lookup(*f));
+                }
+                dst.iter_mut().zip(&tmp).for_each(|(d, t)| *d += t);
+            }
+        }
+    }
+}
+
+fn zip1(dst: &mut [f64], a: &[f64], f: impl Fn(f64) -> f64) {
+    dst.iter_mut().zip(a).for_each(|(d, &x)| *d = f(x));
+}
+
+fn zip1_add(dst: &mut [f64], a: &[f64], f: impl Fn(f64) -> f64) {
+    dst.iter_mut().zip(a).for_each(|(d, &x)| *d += f(x));
+}
+
+fn zip1_mul(dst: &mut [f64], a: &[f64]) {
+    dst.iter_mut().zip(a).for_each(|(d, &x)| *d *= x);
+}
+
+fn zip2(dst: &mut [f64], a: &[f64], b: &[f64], f: impl Fn(f64, f64) -> f64) {
+    dst.iter_mut()
+        .zip(a.iter().zip(b))
+        .for_each(|(d, (&x, &y))| *d = f(x, y));
+}
+
+fn zip2_add(dst: &mut [f64], a: &[f64], b: &[f64], f: impl Fn(f64, f64) -> f64) {
+    dst.iter_mut()
+        .zip(a.iter().zip(b))
+        .for_each(|(d, (&x, &y))| *d += f(x, y));
+}
+
+/// Reusable column-major buffers for [`ModelStructure::assemble`].
+#[derive(Debug, Clone, Default)]
+pub struct Workspace {
+    signals: Vec<f64>,
+    columns: Vec<f64>,
+    outputs: Vec<f64>,
+    capacity: usize,
+    len: usize,
+    n_columns: usize,
+}
+
+impl Workspace {
+    /// A workspace with room for `capacity` samples of a structure with `n_columns`
+    /// columns.
+    pub fn new(capacity: usize, n_columns: usize) -> Self {
+        let mut ws = Self::default();
+        ws.prepare(capacity, n_columns);
+        ws.len = 0;
+        ws
+    }
+
+    fn prepare(&mut self, n: usize, n_columns: usize) {
+        if n > self.capacity || n_columns > self.n_columns {
+            self.capacity = self.capacity.max(n);
+            self.n_columns = self.n_columns.max(n_columns);
+            self.signals.resize(SIGNAL_COUNT * self.capacity, 0.0);
+            self.columns.resize(self.n_columns * self.capacity, 0.0);
+            self.outputs.resize(6 * self.capacity, 0.0);
+        }
+        self.len = n;
+    }
+
+    /// Samples in the last assembled chunk.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True when the last assembled chunk was empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Regressor column `j` of the last assembled chunk.
+    pub fn column(&self, j: usize) -> &[f64] {
+        &self.columns[j * self.capacity..j * self.capacity + self.len]
+    }
+
+    /// Measured output of `axis` minus the known terms, for the last assembled chunk.
+    pub fn output(&self, axis: Axis) -> &[f64] {
+        let a = axis as usize;
+        &self.outputs[a * self.capacity..a * self.capacity + self.len]
+    }
+}

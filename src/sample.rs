@@ -1,0 +1,174 @@
+//! The sample stream every reader and the simulator produce and the estimator consumes:
+//! the data contract of DESIGN.md in structure-of-arrays chunks.
+//!
+//! Units are SI, axes body FRD: velocity u, v, w (m/s, air-relative), rates p, q, r
+//! (rad/s), rotor speeds Ω_i (rad/s, positive), rotor accelerations Ω̇_i (rad/s²),
+//! force F (N) and moment M (N m) on the airframe, gravity excluded.
+
+/// The six force and moment axes of Eq. 22, in output order.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+pub enum Axis {
+    /// Body x force F_x, N (Eq. 22a).
+    Fx = 0,
+    /// Body y force F_y, N (Eq. 22b).
+    Fy = 1,
+    /// Body z force F_z, N (Eq. 22c).
+    Fz = 2,
+    /// Rolling moment M_x, N m (Eq. 22d).
+    Mx = 3,
+    /// Pitching moment M_y, N m (Eq. 22e).
+    My = 4,
+    /// Yawing moment M_z, N m (Eq. 22f).
+    Mz = 5,
+}
+
+impl Axis {
+    /// All six axes in output order.
+    pub const ALL: [Axis; 6] = [Axis::Fx, Axis::Fy, Axis::Fz, Axis::Mx, Axis::My, Axis::Mz];
+
+    /// Short name as used in reports ("Fx" … "Mz").
+    pub fn name(self) -> &'static str {
+        ["Fx", "Fy", "Fz", "Mx", "My", "Mz"][self as usize]
+    }
+
+    /// Unit of the axis ("N" or "N m").
+    pub fn unit(self) -> &'static str {
+        if (self as usize) < 3 { "N" } else { "N m" }
+    }
+}
+
+impl std::fmt::Display for Axis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A chunk of consecutive samples, one vector per signal (structure of arrays).
+///
+/// All vectors hold `len()` values, except the optional ones, which are either empty
+/// (signal absent) or hold `len()` values.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SampleChunk {
+    /// Time, s.
+    pub t: Vec<f64>,
+    /// Air-relative velocity u, v, w in body axes, m/s.
+    pub velocity: [Vec<f64>; 3],
+    /// Body rates p, q, r, rad/s.
+    pub rates: [Vec<f64>; 3],
+    /// Rotor speeds Ω_i, rad/s: one vector per rotor, numbered as in the vehicle.
+    pub omega: Vec<Vec<f64>>,
+    /// Rotor accelerations Ω̇_i, rad/s², one vector per rotor; empty when not available.
+    pub omega_dot: Vec<Vec<f64>>,
+    /// Measured force F_x, F_y, F_z (N) and moment M_x, M_y, M_z (N m), body axes,
+    /// gravity excluded, in [`Axis`] order.
+    pub wrench: [Vec<f64>; 6],
+    /// CG height above ground, m (up); empty when not logged.
+    pub height: Vec<f64>,
+}
+
+impl SampleChunk {
+    /// An empty chunk for `rotors` rotors, with room for `capacity` samples.
+    pub fn with_capacity(rotors: usize, capacity: usize, with_omega_dot: bool) -> Self {
+        let v = || Vec::with_capacity(capacity);
+        Self {
+            t: v(),
+            velocity: [v(), v(), v()],
+            rates: [v(), v(), v()],
+            omega: (0..rotors).map(|_| v()).collect(),
+            omega_dot: if with_omega_dot {
+                (0..rotors).map(|_| v()).collect()
+            } else {
+                Vec::new()
+            },
+            wrench: [v(), v(), v(), v(), v(), v()],
+            height: Vec::new(),
+        }
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// True when the chunk holds no sample.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Number of rotors.
+    pub fn rotor_count(&self) -> usize {
+        self.omega.len()
+    }
+
+    /// True when rotor accelerations are present.
+    pub fn has_omega_dot(&self) -> bool {
+        !self.omega_dot.is_empty()
+    }
+
+    /// Removes all samples, keeping the allocations.
+    pub fn clear(&mut self) {
+        self.t.clear();
+        self.velocity.iter_mut().for_each(Vec::clear);
+        self.rates.iter_mut().for_each(Vec::clear);
+        self.omega.iter_mut().for_each(Vec::clear);
+        self.omega_dot.iter_mut().for_each(Vec::clear);
+        self.wrench.iter_mut().for_each(Vec::clear);
+        self.height.clear();
+    }
+
+    /// Appends one sample. `omega_dot` and `height` must be given exactly when the chunk
+    /// carries them.
+    pub fn push(&mut self, s: &Sample) {
+        self.t.push(s.t);
+        for k in 0..3 {
+            self.velocity[k].push(s.velocity[k]);
+            self.rates[k].push(s.rates[k]);
+        }
+        for (dst, &w) in self.omega.iter_mut().zip(&s.omega) {
+            dst.push(w);
+        }
+        for (dst, &w) in self.omega_dot.iter_mut().zip(&s.omega_dot) {
+            dst.push(w);
+        }
+        for (dst, &f) in self.wrench.iter_mut().zip(&s.wrench) {
+            dst.push(f);
+        }
+        if let Some(h) = s.height {
+            self.height.push(h);
+        }
+    }
+
+    /// Copies sample `k` out of the chunk.
+    pub fn sample(&self, k: usize) -> Sample {
+        Sample {
+            t: self.t[k],
+            velocity: self.velocity.each_ref().map(|v| v[k]),
+            rates: self.rates.each_ref().map(|v| v[k]),
+            omega: self.omega.iter().map(|v| v[k]).collect(),
+            omega_dot: self.omega_dot.iter().map(|v| v[k]).collect(),
+            wrench: self.wrench.each_ref().map(|v| v[k]),
+            height: self.height.get(k).copied(),
+        }
+    }
+}
+
+/// One sample of the data contract (array of structures form, for convenience APIs).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Sample {
+    /// Time, s.
+    pub t: f64,
+    /// Air-relative velocity u, v, w in body axes, m/s.
+    pub velocity: [f64; 3],
+    /// Body rates p, q, r, rad/s.
+    pub rates: [f64; 3],
+    /// Rotor speeds Ω_i, rad/s.
+    pub omega: Vec<f64>,
+    /// Rotor accelerations Ω̇_i, rad/s² (empty when not available).
+    pub omega_dot: Vec<f64>,
+    /// Force (N) and moment (N m) in [`Axis`] order.
+    pub wrench: [f64; 6],
+    /// CG height above ground, m, when logged.
+    pub height: Option<f64>,
+}

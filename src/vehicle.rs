@@ -1,0 +1,722 @@
+//! Vehicle geometry and mass properties (seed §2 and §4.2).
+//!
+//! A [`Vehicle`] is read from the TOML format of DESIGN.md (an explicit rotor table) or
+//! built from a [`Preset`]. Construction checks physical validity (positive mass,
+//! symmetric positive-definite inertia, …) and Assumption 2 of the seed (even rotor count
+//! ≥ 4, alternating spin, equal arms, equal interior angles, symmetry about both body axes,
+//! coplanar rotors at one height), then classifies the layout per Definition 1.
+//!
+//! Axes are body FRD: x forward, y right, z down. Rotor positions are hub positions
+//! relative to the centre of gravity, in metres. A rotor's spin `sigma = +1` means its
+//! angular velocity points along +z (down), i.e. clockwise seen from above.
+
+use std::f64::consts::PI;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+/// Standard gravity, m/s², used for the hover induced velocity ν0.
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// Default tolerance of the Assumption 2 checks, relative to the arm length ℓ (lengths)
+/// or in radians (angles).
+pub const DEFAULT_GEOMETRY_TOLERANCE: f64 = 1e-3;
+
+/// One rotor: hub position in body FRD axes and spin direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rotor {
+    /// Hub position along body x (forward), m.
+    pub x: f64,
+    /// Hub position along body y (right), m.
+    pub y: f64,
+    /// Spin direction σ ∈ {−1, +1}: +1 when the rotor's angular velocity points along
+    /// body +z (down), by the right-hand rule (seed Eq. 10).
+    pub spin: f64,
+}
+
+/// Configuration class of Definition 1 (seed §4.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum ConfigurationClass {
+    /// N = 4 with a rotor on a body axis, e.g. at (0, ℓ).
+    QuadPlus,
+    /// N = 4 with a rotor at (ℓ√2/2, ℓ√2/2).
+    QuadX,
+    /// N ≥ 6.
+    Multirotor6Plus,
+}
+
+impl fmt::Display for ConfigurationClass {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::QuadPlus => "quadrotor+",
+            Self::QuadX => "quadrotorx",
+            Self::Multirotor6Plus => "multirotor>=6",
+        })
+    }
+}
+
+/// Built-in layouts. Rotor 1 sits at azimuth φ0 (0 for `+` layouts, π/N for `x` layouts),
+/// azimuth measured from body +x towards body +y; rotors are numbered by increasing
+/// azimuth and alternate in spin starting with `first_spin`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// Quadrotor × (Definition 1): rotor 1 front-right.
+    QuadX,
+    /// Quadrotor + (Definition 1): rotor 1 straight ahead.
+    QuadPlus,
+    /// Hexarotor with rotor 1 straight ahead.
+    HexaPlus,
+    /// Hexarotor with rotor 1 at 30° (front-right).
+    HexaX,
+    /// Octorotor with rotor 1 straight ahead.
+    OctoPlus,
+    /// Octorotor with rotor 1 at 22.5° (front-right).
+    OctoX,
+}
+
+impl Preset {
+    /// Rotor count and azimuth of rotor 1 (rad).
+    fn layout(self) -> (usize, f64) {
+        match self {
+            Self::QuadX => (4, PI / 4.0),
+            Self::QuadPlus => (4, 0.0),
+            Self::HexaPlus => (6, 0.0),
+            Self::HexaX => (6, PI / 6.0),
+            Self::OctoPlus => (8, 0.0),
+            Self::OctoX => (8, PI / 8.0),
+        }
+    }
+
+    /// Parses the snake_case name used in TOML and on the command line.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Some(match name {
+            "quad_x" => Self::QuadX,
+            "quad_plus" => Self::QuadPlus,
+            "hexa_plus" => Self::HexaPlus,
+            "hexa_x" => Self::HexaX,
+            "octo_plus" => Self::OctoPlus,
+            "octo_x" => Self::OctoX,
+            _ => return None,
+        })
+    }
+
+    /// All preset names, for help texts.
+    pub const NAMES: [&'static str; 6] = [
+        "quad_x",
+        "quad_plus",
+        "hexa_plus",
+        "hexa_x",
+        "octo_plus",
+        "octo_x",
+    ];
+
+    /// Rotor table of this layout at arm length `arm_length` (m), rotor 1 spinning
+    /// `first_spin` (±1).
+    pub fn rotors(self, arm_length: f64, first_spin: f64) -> Vec<Rotor> {
+        let (n, phi0) = self.layout();
+        (0..n)
+            .map(|k| {
+                let phi = phi0 + 2.0 * PI * k as f64 / n as f64;
+                let spin = if k % 2 == 0 { first_spin } else { -first_spin };
+                Rotor {
+                    x: clean_trig(arm_length * phi.cos(), arm_length),
+                    y: clean_trig(arm_length * phi.sin(), arm_length),
+                    spin,
+                }
+            })
+            .collect()
+    }
+}
+
+/// Rounds a coordinate that is zero up to floating-point noise to exactly zero, so presets
+/// are exactly symmetric.
+fn clean_trig(value: f64, scale: f64) -> f64 {
+    if value.abs() < 1e-14 * scale {
+        0.0
+    } else {
+        value
+    }
+}
+
+/// Where a vehicle definition came from, for error messages.
+#[derive(Debug, Clone, PartialEq)]
+pub enum VehicleSource {
+    /// A TOML file.
+    File(PathBuf),
+    /// Built in code (preset or explicit table).
+    Code,
+}
+
+impl fmt::Display for VehicleSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::File(p) => write!(f, "{}", p.display()),
+            Self::Code => f.write_str("vehicle"),
+        }
+    }
+}
+
+/// Why a vehicle definition was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum VehicleErrorKind {
+    /// The file could not be read.
+    #[error("cannot read file: {0}")]
+    Io(String),
+    /// TOML syntax error or a field of the wrong type / missing field.
+    #[error("{0}")]
+    Parse(String),
+    /// A scalar field outside its physical range.
+    #[error("field `{field}` = {value}: {requirement}")]
+    OutOfRange {
+        /// Field name as in the TOML file.
+        field: &'static str,
+        /// Offending value.
+        value: f64,
+        /// What the value must satisfy.
+        requirement: &'static str,
+    },
+    /// The inertia matrix is not symmetric positive definite.
+    #[error("field `inertia`: {0}")]
+    Inertia(String),
+    /// Neither a rotor table nor a preset, or both.
+    #[error("{0}")]
+    Layout(String),
+    /// A rotor entry is invalid on its own.
+    #[error("rotor {rotor} (entry {rotor} of [[rotors]]): {problem}")]
+    Rotor {
+        /// 1-based rotor number.
+        rotor: usize,
+        /// What is wrong.
+        problem: String,
+    },
+    /// Assumption 2 of the seed does not hold.
+    #[error("Assumption 2 fails ({condition}): {detail}")]
+    Assumption2 {
+        /// The failing condition, e.g. "alternating spin".
+        condition: &'static str,
+        /// Which rotors and by how much.
+        detail: String,
+    },
+}
+
+/// A vehicle definition that was refused, with where it came from.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{source_name}: {kind}")]
+pub struct VehicleError {
+    /// File or code origin.
+    pub source_name: VehicleSource,
+    /// What is wrong.
+    pub kind: VehicleErrorKind,
+}
+
+/// Mass, inertia, air and rotor properties shared by every layout.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MassAndRotorProperties {
+    /// Vehicle mass m, kg.
+    pub mass: f64,
+    /// Inertia matrix I about the CG in body axes, kg m².
+    pub inertia: [[f64; 3]; 3],
+    /// Air density ρ, kg/m³.
+    pub air_density: f64,
+    /// Rotor radius R, m.
+    pub rotor_radius: f64,
+    /// Height h of the rotor plane above the CG, m (rotor hubs at z = −h).
+    pub hub_height: f64,
+    /// Polar moment of inertia J_z of one motor + rotor, kg m².
+    pub rotor_inertia: f64,
+}
+
+/// A multirotor that satisfies Assumption 2, classified per Definition 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vehicle {
+    /// Human-readable name.
+    pub name: String,
+    /// Mass, inertia, air and rotor properties.
+    pub props: MassAndRotorProperties,
+    rotors: Vec<Rotor>,
+    arm_length: f64,
+    class: ConfigurationClass,
+}
+
+/// The TOML file layout (DESIGN.md "Vehicle file").
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VehicleFile {
+    name: String,
+    mass: f64,
+    inertia: [[f64; 3]; 3],
+    #[serde(default = "default_air_density")]
+    air_density: f64,
+    rotor_radius: f64,
+    hub_height: f64,
+    #[serde(default)]
+    rotor_inertia: f64,
+    #[serde(default)]
+    rotors: Vec<RotorEntry>,
+    preset: Option<Preset>,
+    arm_length: Option<f64>,
+    first_spin: Option<i64>,
+    geometry_tolerance: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RotorEntry {
+    x: f64,
+    y: f64,
+    /// Optional hub z (m, FRD); must equal −hub_height (coplanar rotors).
+    z: Option<f64>,
+    spin: i64,
+    /// Optional cant angle (deg); Assumption 2 requires 0.
+    cant_deg: Option<f64>,
+}
+
+fn default_air_density() -> f64 {
+    1.225
+}
+
+impl Vehicle {
+    /// Reads and checks a vehicle TOML file.
+    pub fn from_toml_file(path: &Path) -> Result<Self, VehicleError> {
+        let source = VehicleSource::File(path.to_path_buf());
+        let text = std::fs::read_to_string(path).map_err(|e| VehicleError {
+            source_name: source.clone(),
+            kind: VehicleErrorKind::Io(e.to_string()),
+        })?;
+        Self::from_toml_str(&text, source)
+    }
+
+    /// Parses and checks vehicle TOML text; `source` names it in errors.
+    pub fn from_toml_str(text: &str, source: VehicleSource) -> Result<Self, VehicleError> {
+        let err = |kind| VehicleError {
+            source_name: source.clone(),
+            kind,
+        };
+        let file: VehicleFile =
+            toml::from_str(text).map_err(|e| err(VehicleErrorKind::Parse(one_line(&e))))?;
+        let rotors = file_rotors(&file).map_err(err)?;
+        let props = MassAndRotorProperties {
+            mass: file.mass,
+            inertia: file.inertia,
+            air_density: file.air_density,
+            rotor_radius: file.rotor_radius,
+            hub_height: file.hub_height,
+            rotor_inertia: file.rotor_inertia,
+        };
+        let tol = file
+            .geometry_tolerance
+            .unwrap_or(DEFAULT_GEOMETRY_TOLERANCE);
+        Self::build(file.name, props, rotors, tol).map_err(err)
+    }
+
+    /// Builds a preset layout with arm length `arm_length` (m); rotor 1 spins `first_spin`.
+    pub fn preset(
+        name: &str,
+        preset: Preset,
+        arm_length: f64,
+        first_spin: f64,
+        props: MassAndRotorProperties,
+    ) -> Result<Self, VehicleError> {
+        check_positive("arm_length", arm_length).map_err(|kind| VehicleError {
+            source_name: VehicleSource::Code,
+            kind,
+        })?;
+        Self::from_rotors(name, props, preset.rotors(arm_length, first_spin))
+    }
+
+    /// Builds a vehicle from an explicit rotor table, with the default tolerance.
+    pub fn from_rotors(
+        name: &str,
+        props: MassAndRotorProperties,
+        rotors: Vec<Rotor>,
+    ) -> Result<Self, VehicleError> {
+        Self::build(name.to_string(), props, rotors, DEFAULT_GEOMETRY_TOLERANCE).map_err(|kind| {
+            VehicleError {
+                source_name: VehicleSource::Code,
+                kind,
+            }
+        })
+    }
+
+    fn build(
+        name: String,
+        props: MassAndRotorProperties,
+        rotors: Vec<Rotor>,
+        tol: f64,
+    ) -> Result<Self, VehicleErrorKind> {
+        check_properties(&props)?;
+        check_positive("geometry_tolerance", tol)?;
+        let arm_length = check_assumption2(&rotors, tol)?;
+        let class = classify(&rotors, arm_length, tol);
+        Ok(Self {
+            name,
+            props,
+            rotors,
+            arm_length,
+            class,
+        })
+    }
+
+    /// The rotors, numbered 1..=N in this order.
+    pub fn rotors(&self) -> &[Rotor] {
+        &self.rotors
+    }
+
+    /// Rotor count N_r.
+    pub fn rotor_count(&self) -> usize {
+        self.rotors.len()
+    }
+
+    /// Arm length ℓ (mean hub distance from the CG in the rotor plane), m.
+    pub fn arm_length(&self) -> f64 {
+        self.arm_length
+    }
+
+    /// Configuration class of Definition 1.
+    pub fn class(&self) -> ConfigurationClass {
+        self.class
+    }
+
+    /// Area of one rotor disk πR², m².
+    pub fn disk_area(&self) -> f64 {
+        PI * self.props.rotor_radius.powi(2)
+    }
+
+    /// Total rotor disk area A_r = N πR², m² (seed §3).
+    pub fn total_disk_area(&self) -> f64 {
+        self.rotor_count() as f64 * self.disk_area()
+    }
+
+    /// Hover induced velocity ν0 = √(m g / (2 ρ A_r)), m/s (seed §3).
+    pub fn hover_induced_velocity(&self) -> f64 {
+        (self.props.mass * STANDARD_GRAVITY
+            / (2.0 * self.props.air_density * self.total_disk_area()))
+        .sqrt()
+    }
+
+    /// Hub position r_i = (x_i, y_i, −h) of rotor `i` (0-based) in body axes, m.
+    pub fn hub_position(&self, i: usize) -> [f64; 3] {
+        let r = self.rotors[i];
+        [r.x, r.y, -self.props.hub_height]
+    }
+
+    /// The mirror-image spin assignment: same geometry, every spin reversed.
+    pub fn with_spins_reversed(&self) -> Self {
+        let mut v = self.clone();
+        for r in &mut v.rotors {
+            r.spin = -r.spin;
+        }
+        v
+    }
+}
+
+/// TOML error text on one line (the toml crate prints a multi-line snippet).
+fn one_line(e: &toml::de::Error) -> String {
+    let msg = e.message().trim().to_string();
+    match e.span() {
+        Some(span) => format!("TOML error at byte {}: {msg}", span.start),
+        None => format!("TOML error: {msg}"),
+    }
+}
+
+fn file_rotors(file: &VehicleFile) -> Result<Vec<Rotor>, VehicleErrorKind> {
+    match (&file.preset, file.rotors.is_empty()) {
+        (Some(_), false) => Err(VehicleErrorKind::Layout(
+            "give either `preset` or a [[rotors]] table, not both".into(),
+        )),
+        (None, true) => Err(VehicleErrorKind::Layout(
+            "no rotors: give a [[rotors]] table or a `preset` with `arm_length`".into(),
+        )),
+        (Some(preset), true) => {
+            let arm = file.arm_length.ok_or_else(|| {
+                VehicleErrorKind::Layout("`preset` needs `arm_length` (m)".into())
+            })?;
+            check_positive("arm_length", arm)?;
+            let spin =
+                spin_value(file.first_spin.unwrap_or(1)).ok_or(VehicleErrorKind::OutOfRange {
+                    field: "first_spin",
+                    value: file.first_spin.unwrap_or(0) as f64,
+                    requirement: "must be +1 or -1",
+                })?;
+            Ok(preset.rotors(arm, spin))
+        }
+        (None, false) => file
+            .rotors
+            .iter()
+            .enumerate()
+            .map(|(i, r)| rotor_from_entry(i + 1, r, file.hub_height))
+            .collect(),
+    }
+}
+
+fn spin_value(s: i64) -> Option<f64> {
+    match s {
+        1 => Some(1.0),
+        -1 => Some(-1.0),
+        _ => None,
+    }
+}
+
+fn rotor_from_entry(n: usize, r: &RotorEntry, hub_height: f64) -> Result<Rotor, VehicleErrorKind> {
+    let bad = |problem: String| VehicleErrorKind::Rotor { rotor: n, problem };
+    if !r.x.is_finite() || !r.y.is_finite() {
+        return Err(bad("position is not finite".into()));
+    }
+    let spin =
+        spin_value(r.spin).ok_or_else(|| bad(format!("spin = {} must be +1 or -1", r.spin)))?;
+    if let Some(z) = r.z
+        && (z + hub_height).abs() > 1e-9_f64.max(1e-6 * hub_height.abs())
+    {
+        return Err(VehicleErrorKind::Assumption2 {
+            condition: "coplanar rotors at one height",
+            detail: format!(
+                "rotor {n} has z = {z} m but hub_height = {hub_height} m requires z = {}",
+                -hub_height
+            ),
+        });
+    }
+    if let Some(cant) = r.cant_deg
+        && cant != 0.0
+    {
+        return Err(VehicleErrorKind::Assumption2 {
+            condition: "uncanted rotors",
+            detail: format!("rotor {n} is canted by {cant} deg"),
+        });
+    }
+    Ok(Rotor {
+        x: r.x,
+        y: r.y,
+        spin,
+    })
+}
+
+fn check_positive(field: &'static str, value: f64) -> Result<(), VehicleErrorKind> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(VehicleErrorKind::OutOfRange {
+            field,
+            value,
+            requirement: "must be a finite number > 0",
+        })
+    }
+}
+
+fn check_properties(p: &MassAndRotorProperties) -> Result<(), VehicleErrorKind> {
+    check_positive("mass", p.mass)?;
+    check_positive("air_density", p.air_density)?;
+    check_positive("rotor_radius", p.rotor_radius)?;
+    if !p.hub_height.is_finite() {
+        return Err(VehicleErrorKind::OutOfRange {
+            field: "hub_height",
+            value: p.hub_height,
+            requirement: "must be finite",
+        });
+    }
+    if !(p.rotor_inertia.is_finite() && p.rotor_inertia >= 0.0) {
+        return Err(VehicleErrorKind::OutOfRange {
+            field: "rotor_inertia",
+            value: p.rotor_inertia,
+            requirement: "must be a finite number >= 0",
+        });
+    }
+    check_inertia(&p.inertia)
+}
+
+/// Symmetric positive definite, by Sylvester's criterion on the leading minors.
+fn check_inertia(i: &[[f64; 3]; 3]) -> Result<(), VehicleErrorKind> {
+    if i.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(VehicleErrorKind::Inertia("entries must be finite".into()));
+    }
+    let scale = i[0][0].abs().max(i[1][1].abs()).max(i[2][2].abs());
+    for (a, b) in [(0, 1), (0, 2), (1, 2)] {
+        if (i[a][b] - i[b][a]).abs() > 1e-9 * scale.max(f64::MIN_POSITIVE) {
+            return Err(VehicleErrorKind::Inertia(format!(
+                "not symmetric: I[{a}][{b}] = {} but I[{b}][{a}] = {}",
+                i[a][b], i[b][a]
+            )));
+        }
+    }
+    let m1 = i[0][0];
+    let m2 = i[0][0] * i[1][1] - i[0][1] * i[1][0];
+    let m3 = nalgebra::Matrix3::from_fn(|r, c| i[r][c]).determinant();
+    if !(m1 > 0.0 && m2 > 0.0 && m3 > 0.0) {
+        return Err(VehicleErrorKind::Inertia(format!(
+            "not positive definite (leading minors {m1:.3e}, {m2:.3e}, {m3:.3e} kg m^2 powers must all be > 0)"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks Assumption 2 and returns the arm length ℓ (mean hub radius), m.
+fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind> {
+    let n = rotors.len();
+    let fail = |condition, detail| Err(VehicleErrorKind::Assumption2 { condition, detail });
+    if n < 4 || !n.is_multiple_of(2) {
+        return fail(
+            "even rotor count N >= 4",
+            format!("the vehicle has {n} rotors"),
+        );
+    }
+    let radii: Vec<f64> = rotors.iter().map(|r| r.x.hypot(r.y)).collect();
+    let arm = radii.iter().sum::<f64>() / n as f64;
+    if arm <= 0.0 {
+        return fail("equal arms", "all rotors sit on the CG".into());
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            let d = (rotors[i].x - rotors[j].x).hypot(rotors[i].y - rotors[j].y);
+            if d <= tol * arm {
+                return Err(VehicleErrorKind::Rotor {
+                    rotor: j + 1,
+                    problem: format!("same position as rotor {} (duplicate rotor)", i + 1),
+                });
+            }
+        }
+    }
+    for (i, r) in radii.iter().enumerate() {
+        if (r - arm).abs() > tol * arm {
+            return fail(
+                "equal arms",
+                format!(
+                    "rotor {} has arm {r:.6} m, the mean arm is {arm:.6} m (tolerance {:.2e} m)",
+                    i + 1,
+                    tol * arm
+                ),
+            );
+        }
+    }
+    check_angles_and_spin(rotors, tol)?;
+    check_symmetry(rotors, arm, tol)?;
+    Ok(arm)
+}
+
+/// Equal interior angles 2π/N and alternating spin between azimuthal neighbours.
+fn check_angles_and_spin(rotors: &[Rotor], tol: f64) -> Result<(), VehicleErrorKind> {
+    let n = rotors.len();
+    let mut order: Vec<(f64, usize)> = rotors
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (r.y.atan2(r.x).rem_euclid(2.0 * PI), i))
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let gap = 2.0 * PI / n as f64;
+    for k in 0..n {
+        let (a0, i0) = order[k];
+        let (a1, i1) = order[(k + 1) % n];
+        let d = (a1 - a0).rem_euclid(2.0 * PI);
+        if (d - gap).abs() > tol {
+            return Err(VehicleErrorKind::Assumption2 {
+                condition: "equal interior angles",
+                detail: format!(
+                    "rotors {} and {} are {:.4} deg apart, expected {:.4} deg",
+                    i0 + 1,
+                    i1 + 1,
+                    d.to_degrees(),
+                    gap.to_degrees()
+                ),
+            });
+        }
+        if rotors[i0].spin == rotors[i1].spin {
+            return Err(VehicleErrorKind::Assumption2 {
+                condition: "neighbouring rotors spin in opposite directions",
+                detail: format!(
+                    "neighbouring rotors {} and {} both have spin {:+}",
+                    i0 + 1,
+                    i1 + 1,
+                    rotors[i0].spin
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Every rotor has a mirror image about the body x axis and about the body y axis.
+fn check_symmetry(rotors: &[Rotor], arm: f64, tol: f64) -> Result<(), VehicleErrorKind> {
+    let has = |x: f64, y: f64| rotors.iter().any(|r| (r.x - x).hypot(r.y - y) <= tol * arm);
+    for (i, r) in rotors.iter().enumerate() {
+        if !has(r.x, -r.y) {
+            return Err(VehicleErrorKind::Assumption2 {
+                condition: "symmetric about the body x axis",
+                detail: format!(
+                    "rotor {} at ({}, {}) m has no mirror image at y = {}",
+                    i + 1,
+                    r.x,
+                    r.y,
+                    -r.y
+                ),
+            });
+        }
+        if !has(-r.x, r.y) {
+            return Err(VehicleErrorKind::Assumption2 {
+                condition: "symmetric about the body y axis",
+                detail: format!(
+                    "rotor {} at ({}, {}) m has no mirror image at x = {}",
+                    i + 1,
+                    r.x,
+                    r.y,
+                    -r.x
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Definition 1 (seed §4.2).
+fn classify(rotors: &[Rotor], arm: f64, tol: f64) -> ConfigurationClass {
+    if rotors.len() >= 6 {
+        return ConfigurationClass::Multirotor6Plus;
+    }
+    let on_axis = rotors
+        .iter()
+        .any(|r| r.x.abs() <= tol * arm || r.y.abs() <= tol * arm);
+    if on_axis {
+        ConfigurationClass::QuadPlus
+    } else {
+        ConfigurationClass::QuadX
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn props() -> MassAndRotorProperties {
+        MassAndRotorProperties {
+            mass: 1.0,
+            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
+            air_density: 1.225,
+            rotor_radius: 0.1,
+            hub_height: 0.02,
+            rotor_inertia: 3e-5,
+        }
+    }
+
+    #[test]
+    fn presets_classify_per_definition_1() {
+        let cases = [
+            (Preset::QuadX, ConfigurationClass::QuadX),
+            (Preset::QuadPlus, ConfigurationClass::QuadPlus),
+            (Preset::HexaX, ConfigurationClass::Multirotor6Plus),
+            (Preset::OctoPlus, ConfigurationClass::Multirotor6Plus),
+        ];
+        for (p, class) in cases {
+            let v = Vehicle::preset("t", p, 0.25, 1.0, props()).unwrap();
+            assert_eq!(v.class(), class);
+            assert!((v.arm_length() - 0.25).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn hover_induced_velocity_matches_momentum_theory() {
+        // ν0 = sqrt(m g / (2 ρ N π R²)) for m = 1 kg, N = 4, R = 0.1 m: 3.1999 m/s.
+        let v = Vehicle::preset("t", Preset::QuadX, 0.25, 1.0, props()).unwrap();
+        let expected = (9.80665_f64 / (2.0 * 1.225 * 4.0 * PI * 0.01)).sqrt();
+        assert!((v.hover_induced_velocity() - expected).abs() < 1e-12);
+        assert!((expected - 3.1999).abs() < 1e-3);
+    }
+}
