@@ -52,8 +52,15 @@ fn main() -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::from(1);
     }
-    println!("{} parameters, {} regressor columns", model.params.len(), model.columns.len());
-    println!("{:<4} {:<14} {:<18} {:>14} {:>14}", "axis", "parameter", "regressor", "hover", "fast flight");
+    println!(
+        "{} parameters, {} regressor columns",
+        model.params.len(),
+        model.columns.len()
+    );
+    println!(
+        "{:<4} {:<14} {:<18} {:>14} {:>14}",
+        "axis", "parameter", "regressor", "hover", "fast flight"
+    );
     for axis in Axis::ALL {
         for j in model.axis_columns(axis) {
             let c = &model.columns[j];

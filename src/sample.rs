@@ -66,6 +66,9 @@ pub struct SampleChunk {
     pub wrench: [Vec<f64>; 6],
     /// CG height above ground, m (up); empty when not logged.
     pub height: Vec<f64>,
+    /// Attitude quaternion body→NED `[qw, qx, qy, qz]`; each vector empty when not
+    /// logged.
+    pub attitude: [Vec<f64>; 4],
 }
 
 impl SampleChunk {
@@ -84,6 +87,7 @@ impl SampleChunk {
             },
             wrench: [v(), v(), v(), v(), v(), v()],
             height: Vec::new(),
+            attitude: Default::default(),
         }
     }
 
@@ -116,6 +120,7 @@ impl SampleChunk {
         self.omega_dot.iter_mut().for_each(Vec::clear);
         self.wrench.iter_mut().for_each(Vec::clear);
         self.height.clear();
+        self.attitude.iter_mut().for_each(Vec::clear);
     }
 
     /// Appends one sample. `omega_dot` and `height` must be given exactly when the chunk
@@ -138,6 +143,11 @@ impl SampleChunk {
         if let Some(h) = s.height {
             self.height.push(h);
         }
+        if let Some(q) = s.attitude {
+            for (dst, &c) in self.attitude.iter_mut().zip(&q) {
+                dst.push(c);
+            }
+        }
     }
 
     /// Copies sample `k` out of the chunk.
@@ -150,6 +160,8 @@ impl SampleChunk {
             omega_dot: self.omega_dot.iter().map(|v| v[k]).collect(),
             wrench: self.wrench.each_ref().map(|v| v[k]),
             height: self.height.get(k).copied(),
+            attitude: (!self.attitude[0].is_empty())
+                .then(|| self.attitude.each_ref().map(|v| v[k])),
         }
     }
 }
@@ -171,4 +183,6 @@ pub struct Sample {
     pub wrench: [f64; 6],
     /// CG height above ground, m, when logged.
     pub height: Option<f64>,
+    /// Attitude quaternion body→NED `[qw, qx, qy, qz]`, when logged.
+    pub attitude: Option<[f64; 4]>,
 }
