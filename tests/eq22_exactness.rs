@@ -59,6 +59,7 @@ fn random_sample(rng: &mut StdRng, n: usize) -> Sample {
         omega_dot: (0..n).map(|_| rng.random_range(-3000.0..3000.0)).collect(),
         wrench: [0.0; 6],
         height: None,
+        attitude: None,
     }
 }
 
