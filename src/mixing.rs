@@ -80,28 +80,59 @@ impl Mixing {
     }
 }
 
-/// `dst[k] = Σ_i weights[i] · x_i[k]` (or `x_i[k]²`), vectorisable inner loops.
+/// `dst[k] = Σ_i weights[i] · x_i[k]` (or `x_i[k]²`): rotors with zero weight are
+/// skipped, the rest are taken four at a time in one vectorisable pass over the samples.
 pub fn mix_row<S: AsRef<[f64]>>(
     weights: &[f64],
     rotor_series: &[S],
     square: bool,
     dst: &mut [f64],
 ) {
-    dst.fill(0.0);
+    let n = dst.len();
+    let mut group: [(f64, &[f64]); 4] = [(0.0, &[]); 4];
+    let mut len = 0;
+    let mut first = true;
     for (&m, x) in weights.iter().zip(rotor_series) {
         if m == 0.0 {
             continue;
         }
-        let x = &x.as_ref()[..dst.len()];
-        if square {
-            for (d, &w) in dst.iter_mut().zip(x) {
-                *d += m * w * w;
-            }
-        } else {
-            for (d, &w) in dst.iter_mut().zip(x) {
-                *d += m * w;
-            }
+        group[len] = (m, &x.as_ref()[..n]);
+        len += 1;
+        if len == 4 {
+            mix_group(&group, square, first, dst);
+            first = false;
+            len = 0;
         }
+    }
+    if len > 0 {
+        // Pad with zero weights on a real series so the 4-way kernel applies.
+        for slot in len..4 {
+            group[slot] = (0.0, group[0].1);
+        }
+        mix_group(&group, square, first, dst);
+    } else if first {
+        dst.fill(0.0);
+    }
+}
+
+fn mix_group(group: &[(f64, &[f64]); 4], square: bool, first: bool, dst: &mut [f64]) {
+    match (square, first) {
+        (false, true) => mix4::<false, true>(group, dst),
+        (false, false) => mix4::<false, false>(group, dst),
+        (true, true) => mix4::<true, true>(group, dst),
+        (true, false) => mix4::<true, false>(group, dst),
+    }
+}
+
+/// `dst (=|+=) Σ_{i<4} m_i f(x_i)` with f the identity or the square.
+fn mix4<const SQUARE: bool, const FIRST: bool>(g: &[(f64, &[f64]); 4], dst: &mut [f64]) {
+    let n = dst.len();
+    let f = |x: f64| if SQUARE { x * x } else { x };
+    let [(m0, a), (m1, b), (m2, c), (m3, d)] = *g;
+    let rows = a[..n].iter().zip(&b[..n]).zip(c[..n].iter().zip(&d[..n]));
+    for (out, ((&a, &b), (&c, &d))) in dst.iter_mut().zip(rows) {
+        let v = m0 * f(a) + m1 * f(b) + m2 * f(c) + m3 * f(d);
+        *out = if FIRST { v } else { *out + v };
     }
 }
 

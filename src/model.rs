@@ -245,6 +245,8 @@ pub struct ModelStructure {
     rotor_count: usize,
     mixing: Mixing,
     inflow_weights: [Vec<f64>; 5],
+    /// Signals any column or known term uses (kept in step with the columns).
+    required: Vec<Signal>,
 }
 
 /// Constants of one vehicle that the Eq. 22 coefficients use.
@@ -341,7 +343,7 @@ impl ModelStructure {
             rotors.iter().map(|r| clean(r.spin * r.y)).collect(),
             rotors.iter().map(|r| clean(r.spin * r.x)).collect(),
         ];
-        Self {
+        let mut structure = Self {
             params,
             columns: b.columns,
             known,
@@ -349,7 +351,10 @@ impl ModelStructure {
             rotor_count: vehicle.rotor_count(),
             mixing: Mixing::new(vehicle),
             inflow_weights,
-        }
+            required: Vec::new(),
+        };
+        structure.required = structure.collect_required_signals();
+        structure
     }
 
     /// Index of the parameter called `name`.
@@ -373,7 +378,7 @@ impl ModelStructure {
 
     /// True when assembling needs rotor accelerations.
     pub fn needs_omega_dot(&self) -> bool {
-        self.all_terms().any(|t| t.factors.contains(&Signal::DrDot))
+        self.required.contains(&Signal::DrDot)
     }
 
     fn all_terms(&self) -> impl Iterator<Item = &Term> {
@@ -384,7 +389,11 @@ impl ModelStructure {
     }
 
     /// The signals any column or known term uses, sorted.
-    pub fn required_signals(&self) -> Vec<Signal> {
+    pub fn required_signals(&self) -> &[Signal] {
+        &self.required
+    }
+
+    fn collect_required_signals(&self) -> Vec<Signal> {
         let mut s: Vec<Signal> = self
             .all_terms()
             .flat_map(|t| t.factors.iter().copied())
@@ -404,6 +413,7 @@ impl ModelStructure {
         }
         self.columns.extend(columns);
         self.columns.sort_by_key(|c| c.axis);
+        self.required = self.collect_required_signals();
         idx
     }
 
@@ -428,7 +438,7 @@ impl ModelStructure {
         self.check_chunk(chunk)?;
         let n = chunk.len();
         ws.prepare(n, self.columns.len());
-        for s in self.required_signals() {
+        for &s in &self.required {
             self.compute_signal(s, chunk, ws);
         }
         let Workspace {
@@ -443,7 +453,7 @@ impl ModelStructure {
         for (j, col) in self.columns.iter().enumerate() {
             let dst = &mut columns[j * cap..j * cap + n];
             for (i, t) in col.terms.iter().enumerate() {
-                apply_term(dst, t, i == 0, &lookup);
+                apply_term(dst, t, i == 0, 1.0, &lookup);
             }
         }
         for axis in Axis::ALL {
@@ -451,11 +461,7 @@ impl ModelStructure {
             let dst = &mut outputs[a * cap..a * cap + n];
             dst.copy_from_slice(&chunk.wrench[a][..n]);
             for t in &self.known[a] {
-                let neg = Term {
-                    coef: -t.coef,
-                    factors: t.factors.clone(),
-                };
-                apply_term(dst, &neg, false, &lookup);
+                apply_term(dst, t, false, -1.0, &lookup);
             }
         }
         Ok(())
@@ -839,9 +845,15 @@ fn signal_slice<'a>(
     }
 }
 
-/// `dst (=|+=) coef · Π factors`, one vectorisable loop per term.
-fn apply_term<'a>(dst: &mut [f64], t: &Term, first: bool, lookup: &impl Fn(Signal) -> &'a [f64]) {
-    let c = t.coef;
+/// `dst (=|+=) scale · coef · Π factors`, one vectorisable loop per term.
+fn apply_term<'a>(
+    dst: &mut [f64],
+    t: &Term,
+    first: bool,
+    scale: f64,
+    lookup: &impl Fn(Signal) -> &'a [f64],
+) {
+    let c = scale * t.coef;
     match (t.factors.as_slice(), first) {
         ([], true) => dst.fill(c),
         ([], false) => dst.iter_mut().for_each(|d| *d += c),

@@ -295,7 +295,7 @@ impl Vehicle {
             kind,
         };
         let file: VehicleFile =
-            toml::from_str(text).map_err(|e| err(VehicleErrorKind::Parse(one_line(&e))))?;
+            toml::from_str(text).map_err(|e| err(VehicleErrorKind::Parse(one_line(&e, text))))?;
         let rotors = file_rotors(&file).map_err(err)?;
         let props = MassAndRotorProperties {
             mass: file.mass,
@@ -412,11 +412,17 @@ impl Vehicle {
     }
 }
 
-/// TOML error text on one line (the toml crate prints a multi-line snippet).
-fn one_line(e: &toml::de::Error) -> String {
-    let msg = e.message().trim().to_string();
+/// TOML error text on one line, with the line number and the offending line (the toml
+/// crate prints a multi-line snippet).
+fn one_line(e: &toml::de::Error, text: &str) -> String {
+    let msg = e.message().trim().replace('\n', " ");
     match e.span() {
-        Some(span) => format!("TOML error at byte {}: {msg}", span.start),
+        Some(span) => {
+            let start = span.start.min(text.len());
+            let line_no = text[..start].matches('\n').count() + 1;
+            let line = text.lines().nth(line_no - 1).unwrap_or("").trim();
+            format!("TOML error at line {line_no} (`{line}`): {msg}")
+        }
         None => format!("TOML error: {msg}"),
     }
 }
@@ -562,8 +568,12 @@ fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind
     }
     let radii: Vec<f64> = rotors.iter().map(|r| r.x.hypot(r.y)).collect();
     let arm = radii.iter().sum::<f64>() / n as f64;
-    if arm <= 0.0 {
-        return fail("equal arms", "all rotors sit on the CG".into());
+    // Arms are compared with the median, so the odd one out is the one reported.
+    let mut sorted = radii.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0;
+    if median <= 0.0 {
+        return fail("equal arms", "rotors sit on the CG".into());
     }
     for i in 0..n {
         for j in i + 1..n {
@@ -577,13 +587,13 @@ fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind
         }
     }
     for (i, r) in radii.iter().enumerate() {
-        if (r - arm).abs() > tol * arm {
+        if (r - median).abs() > tol * median {
             return fail(
                 "equal arms",
                 format!(
-                    "rotor {} has arm {r:.6} m, the mean arm is {arm:.6} m (tolerance {:.2e} m)",
+                    "rotor {} has arm {r:.6} m, the median arm is {median:.6} m (tolerance {:.2e} m)",
                     i + 1,
-                    tol * arm
+                    tol * median
                 ),
             );
         }
