@@ -31,10 +31,22 @@ fn chunks(n_rotors: usize, samples: usize) -> Vec<SampleChunk> {
         let mut c = SampleChunk::with_capacity(n_rotors, n, true);
         for _ in 0..n {
             c.push(&Sample {
-                velocity: [rng.random_range(-15.0..15.0), rng.random_range(-15.0..15.0), rng.random_range(-8.0..1.0)],
-                rates: [rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0), rng.random_range(-5.0..5.0)],
-                omega: (0..n_rotors).map(|_| rng.random_range(400.0..1200.0)).collect(),
-                omega_dot: (0..n_rotors).map(|_| rng.random_range(-2000.0..2000.0)).collect(),
+                velocity: [
+                    rng.random_range(-15.0..15.0),
+                    rng.random_range(-15.0..15.0),
+                    rng.random_range(-8.0..1.0),
+                ],
+                rates: [
+                    rng.random_range(-10.0..10.0),
+                    rng.random_range(-10.0..10.0),
+                    rng.random_range(-5.0..5.0),
+                ],
+                omega: (0..n_rotors)
+                    .map(|_| rng.random_range(400.0..1200.0))
+                    .collect(),
+                omega_dot: (0..n_rotors)
+                    .map(|_| rng.random_range(-2000.0..2000.0))
+                    .collect(),
                 wrench: [1.0; 6],
                 ..Sample::default()
             });

@@ -15,6 +15,7 @@
 pub mod airframe;
 pub mod mixing;
 pub mod model;
+pub mod report;
 pub mod rotor;
 pub mod sample;
 pub mod vehicle;

@@ -59,7 +59,7 @@ impl fmt::Display for ConfigurationClass {
 /// Built-in layouts. Rotor 1 sits at azimuth φ0 (0 for `+` layouts, π/N for `x` layouts),
 /// azimuth measured from body +x towards body +y; rotors are numbered by increasing
 /// azimuth and alternate in spin starting with `first_spin`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Preset {
     /// Quadrotor × (Definition 1): rotor 1 front-right.
@@ -238,39 +238,63 @@ pub struct Vehicle {
     rotors: Vec<Rotor>,
     arm_length: f64,
     class: ConfigurationClass,
+    tolerance: f64,
 }
 
-/// The TOML file layout (DESIGN.md "Vehicle file").
-#[derive(Debug, Deserialize)]
+/// The vehicle TOML layout (DESIGN.md "Vehicle file"), unchecked. Embedded as is in
+/// identified-model files; [`Vehicle::from_definition`] checks it.
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
-struct VehicleFile {
-    name: String,
-    mass: f64,
-    inertia: [[f64; 3]; 3],
+pub struct VehicleDefinition {
+    /// Vehicle name.
+    pub name: String,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Inertia about the CG, body axes, kg m².
+    pub inertia: [[f64; 3]; 3],
+    /// Air density, kg/m³ (default 1.225).
     #[serde(default = "default_air_density")]
-    air_density: f64,
-    rotor_radius: f64,
-    hub_height: f64,
+    pub air_density: f64,
+    /// Rotor radius R, m.
+    pub rotor_radius: f64,
+    /// Rotor plane height above the CG, m.
+    pub hub_height: f64,
+    /// J_z of one motor + rotor, kg m² (default 0).
     #[serde(default)]
-    rotor_inertia: f64,
-    #[serde(default)]
-    rotors: Vec<RotorEntry>,
-    preset: Option<Preset>,
-    arm_length: Option<f64>,
-    first_spin: Option<i64>,
-    geometry_tolerance: Option<f64>,
+    pub rotor_inertia: f64,
+    /// Explicit rotor table (or use `preset`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub rotors: Vec<RotorEntry>,
+    /// Preset layout name (or use `rotors`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<Preset>,
+    /// Arm length for a preset, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_length: Option<f64>,
+    /// Spin of rotor 1 for a preset (+1 or −1, default +1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_spin: Option<i64>,
+    /// Tolerance of the Assumption 2 checks (relative to ℓ, or rad).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geometry_tolerance: Option<f64>,
 }
 
-#[derive(Debug, Deserialize)]
+/// One `[[rotors]]` entry of a vehicle file.
+#[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
-struct RotorEntry {
-    x: f64,
-    y: f64,
+pub struct RotorEntry {
+    /// Hub x (forward), m.
+    pub x: f64,
+    /// Hub y (right), m.
+    pub y: f64,
     /// Optional hub z (m, FRD); must equal −hub_height (coplanar rotors).
-    z: Option<f64>,
-    spin: i64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z: Option<f64>,
+    /// Spin direction, +1 (clockwise seen from above) or −1.
+    pub spin: i64,
     /// Optional cant angle (deg); Assumption 2 requires 0.
-    cant_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cant_deg: Option<f64>,
 }
 
 fn default_air_density() -> f64 {
@@ -294,8 +318,20 @@ impl Vehicle {
             source_name: source.clone(),
             kind,
         };
-        let file: VehicleFile =
+        let file: VehicleDefinition =
             toml::from_str(text).map_err(|e| err(VehicleErrorKind::Parse(one_line(&e, text))))?;
+        Self::from_definition(file, source)
+    }
+
+    /// Checks a parsed vehicle definition; `source` names it in errors.
+    pub fn from_definition(
+        file: VehicleDefinition,
+        source: VehicleSource,
+    ) -> Result<Self, VehicleError> {
+        let err = |kind| VehicleError {
+            source_name: source.clone(),
+            kind,
+        };
         let rotors = file_rotors(&file).map_err(err)?;
         let props = MassAndRotorProperties {
             mass: file.mass,
@@ -356,6 +392,7 @@ impl Vehicle {
             rotors,
             arm_length,
             class,
+            tolerance: tol,
         })
     }
 
@@ -402,6 +439,37 @@ impl Vehicle {
         [r.x, r.y, -self.props.hub_height]
     }
 
+    /// The vehicle as an explicit-table definition (round-trips through
+    /// [`Vehicle::from_definition`]).
+    pub fn definition(&self) -> VehicleDefinition {
+        let p = &self.props;
+        VehicleDefinition {
+            name: self.name.clone(),
+            mass: p.mass,
+            inertia: p.inertia,
+            air_density: p.air_density,
+            rotor_radius: p.rotor_radius,
+            hub_height: p.hub_height,
+            rotor_inertia: p.rotor_inertia,
+            rotors: self
+                .rotors
+                .iter()
+                .map(|r| RotorEntry {
+                    x: r.x,
+                    y: r.y,
+                    z: None,
+                    spin: r.spin as i64,
+                    cant_deg: None,
+                })
+                .collect(),
+            preset: None,
+            arm_length: None,
+            first_spin: None,
+            geometry_tolerance: (self.tolerance != DEFAULT_GEOMETRY_TOLERANCE)
+                .then_some(self.tolerance),
+        }
+    }
+
     /// The mirror-image spin assignment: same geometry, every spin reversed.
     pub fn with_spins_reversed(&self) -> Self {
         let mut v = self.clone();
@@ -427,7 +495,7 @@ fn one_line(e: &toml::de::Error, text: &str) -> String {
     }
 }
 
-fn file_rotors(file: &VehicleFile) -> Result<Vec<Rotor>, VehicleErrorKind> {
+fn file_rotors(file: &VehicleDefinition) -> Result<Vec<Rotor>, VehicleErrorKind> {
     match (&file.preset, file.rotors.is_empty()) {
         (Some(_), false) => Err(VehicleErrorKind::Layout(
             "give either `preset` or a [[rotors]] table, not both".into(),
@@ -719,6 +787,14 @@ mod tests {
             assert_eq!(v.class(), class);
             assert!((v.arm_length() - 0.25).abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn definition_round_trips_through_toml() {
+        let v = Vehicle::preset("t", Preset::HexaX, 0.3, -1.0, props()).unwrap();
+        let text = toml::to_string(&v.definition()).unwrap();
+        let back = Vehicle::from_toml_str(&text, VehicleSource::Code).unwrap();
+        assert_eq!(back, v);
     }
 
     #[test]

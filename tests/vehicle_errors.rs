@@ -19,7 +19,12 @@ fn rotors(table: &[(f64, f64, i64)]) -> String {
         .collect()
 }
 
-const QUAD_X: [(f64, f64, i64); 4] = [(0.159, 0.159, 1), (-0.159, 0.159, -1), (-0.159, -0.159, 1), (0.159, -0.159, -1)];
+const QUAD_X: [(f64, f64, i64); 4] = [
+    (0.159, 0.159, 1),
+    (-0.159, 0.159, -1),
+    (-0.159, -0.159, 1),
+    (0.159, -0.159, -1),
+];
 
 fn error_of(text: &str) -> String {
     match Vehicle::from_toml_str(text, VehicleSource::File("bad.toml".into())) {
@@ -30,7 +35,10 @@ fn error_of(text: &str) -> String {
 
 fn assert_error(text: &str, expected: &[&str]) {
     let msg = error_of(text);
-    assert!(msg.starts_with("bad.toml: "), "error does not name the file: {msg}");
+    assert!(
+        msg.starts_with("bad.toml: "),
+        "error does not name the file: {msg}"
+    );
     for part in expected {
         assert!(msg.contains(part), "error `{msg}` lacks `{part}`");
     }
@@ -38,7 +46,8 @@ fn assert_error(text: &str, expected: &[&str]) {
 
 #[test]
 fn valid_file_is_accepted() {
-    let v = Vehicle::from_toml_str(&format!("{HEADER}{}", rotors(&QUAD_X)), VehicleSource::Code).unwrap();
+    let v = Vehicle::from_toml_str(&format!("{HEADER}{}", rotors(&QUAD_X)), VehicleSource::Code)
+        .unwrap();
     assert_eq!(v.rotor_count(), 4);
     assert!((v.arm_length() - 0.159 * 2f64.sqrt()).abs() < 1e-12);
 }
@@ -51,13 +60,23 @@ fn missing_field() {
 
 #[test]
 fn toml_syntax_error() {
-    assert_error("name = \"t\"\nmass = = 1\n", &["TOML error at line 2 (`mass = = 1`)"]);
+    assert_error(
+        "name = \"t\"\nmass = = 1\n",
+        &["TOML error at line 2 (`mass = = 1`)"],
+    );
 }
 
 #[test]
 fn wrong_type() {
-    let text = format!("{}{}", HEADER.replace("mass = 1.2", "mass = \"heavy\""), rotors(&QUAD_X));
-    assert_error(&text, &["TOML error at line 3 (`mass = \"heavy\"`): invalid type"]);
+    let text = format!(
+        "{}{}",
+        HEADER.replace("mass = 1.2", "mass = \"heavy\""),
+        rotors(&QUAD_X)
+    );
+    assert_error(
+        &text,
+        &["TOML error at line 3 (`mass = \"heavy\"`): invalid type"],
+    );
 }
 
 #[test]
@@ -68,13 +87,24 @@ fn unknown_field_is_a_typo_not_ignored() {
 
 #[test]
 fn negative_mass() {
-    let text = format!("{}{}", HEADER.replace("mass = 1.2", "mass = -1.2"), rotors(&QUAD_X));
-    assert_error(&text, &["field `mass` = -1.2", "must be a finite number > 0"]);
+    let text = format!(
+        "{}{}",
+        HEADER.replace("mass = 1.2", "mass = -1.2"),
+        rotors(&QUAD_X)
+    );
+    assert_error(
+        &text,
+        &["field `mass` = -1.2", "must be a finite number > 0"],
+    );
 }
 
 #[test]
 fn zero_rotor_radius() {
-    let text = format!("{}{}", HEADER.replace("rotor_radius = 0.0635", "rotor_radius = 0.0"), rotors(&QUAD_X));
+    let text = format!(
+        "{}{}",
+        HEADER.replace("rotor_radius = 0.0635", "rotor_radius = 0.0"),
+        rotors(&QUAD_X)
+    );
     assert_error(&text, &["field `rotor_radius` = 0"]);
 }
 
@@ -86,7 +116,11 @@ fn nan_air_density() {
 
 #[test]
 fn negative_rotor_inertia() {
-    let text = format!("{}{}", HEADER.replace("rotor_inertia = 3.0e-5", "rotor_inertia = -3.0e-5"), rotors(&QUAD_X));
+    let text = format!(
+        "{}{}",
+        HEADER.replace("rotor_inertia = 3.0e-5", "rotor_inertia = -3.0e-5"),
+        rotors(&QUAD_X)
+    );
     assert_error(&text, &["field `rotor_inertia`", ">= 0"]);
 }
 
@@ -94,7 +128,10 @@ fn negative_rotor_inertia() {
 fn inertia_not_positive_definite() {
     let text = format!(
         "{}{}",
-        HEADER.replace("[[0.011, 0, 0], [0, 0.012, 0], [0, 0, 0.021]]", "[[0.011, 0.02, 0], [0.02, 0.012, 0], [0, 0, 0.021]]"),
+        HEADER.replace(
+            "[[0.011, 0, 0], [0, 0.012, 0], [0, 0, 0.021]]",
+            "[[0.011, 0.02, 0], [0.02, 0.012, 0], [0, 0, 0.021]]"
+        ),
         rotors(&QUAD_X)
     );
     assert_error(&text, &["field `inertia`: not positive definite"]);
@@ -104,37 +141,70 @@ fn inertia_not_positive_definite() {
 fn inertia_not_symmetric() {
     let text = format!(
         "{}{}",
-        HEADER.replace("[[0.011, 0, 0], [0, 0.012, 0], [0, 0, 0.021]]", "[[0.011, 0.001, 0], [0, 0.012, 0], [0, 0, 0.021]]"),
+        HEADER.replace(
+            "[[0.011, 0, 0], [0, 0.012, 0], [0, 0, 0.021]]",
+            "[[0.011, 0.001, 0], [0, 0.012, 0], [0, 0, 0.021]]"
+        ),
         rotors(&QUAD_X)
     );
-    assert_error(&text, &["field `inertia`: not symmetric: I[0][1] = 0.001 but I[1][0] = 0"]);
+    assert_error(
+        &text,
+        &["field `inertia`: not symmetric: I[0][1] = 0.001 but I[1][0] = 0"],
+    );
 }
 
 #[test]
 fn odd_rotor_count() {
     let three = [(0.2, 0.0, 1), (-0.1, 0.173, -1), (-0.1, -0.173, 1)];
-    assert_error(&format!("{HEADER}{}", rotors(&three)), &["Assumption 2 fails (even rotor count N >= 4)", "3 rotors"]);
+    assert_error(
+        &format!("{HEADER}{}", rotors(&three)),
+        &["Assumption 2 fails (even rotor count N >= 4)", "3 rotors"],
+    );
 }
 
 #[test]
 fn duplicate_rotor_position() {
-    let dup = [(0.159, 0.159, 1), (-0.159, 0.159, -1), (-0.159, -0.159, 1), (0.159, 0.159, -1)];
-    assert_error(&format!("{HEADER}{}", rotors(&dup)), &["rotor 4", "same position as rotor 1 (duplicate rotor)"]);
+    let dup = [
+        (0.159, 0.159, 1),
+        (-0.159, 0.159, -1),
+        (-0.159, -0.159, 1),
+        (0.159, 0.159, -1),
+    ];
+    assert_error(
+        &format!("{HEADER}{}", rotors(&dup)),
+        &["rotor 4", "same position as rotor 1 (duplicate rotor)"],
+    );
 }
 
 #[test]
 fn neighbours_spinning_the_same_way() {
-    let same = [(0.159, 0.159, 1), (-0.159, 0.159, 1), (-0.159, -0.159, -1), (0.159, -0.159, -1)];
+    let same = [
+        (0.159, 0.159, 1),
+        (-0.159, 0.159, 1),
+        (-0.159, -0.159, -1),
+        (0.159, -0.159, -1),
+    ];
     assert_error(
         &format!("{HEADER}{}", rotors(&same)),
-        &["neighbouring rotors spin in opposite directions", "rotors 1 and 2 both have spin +1"],
+        &[
+            "neighbouring rotors spin in opposite directions",
+            "rotors 1 and 2 both have spin +1",
+        ],
     );
 }
 
 #[test]
 fn unequal_arms() {
-    let long = [(0.159, 0.159, 1), (-0.159, 0.159, -1), (-0.2, -0.2, 1), (0.159, -0.159, -1)];
-    assert_error(&format!("{HEADER}{}", rotors(&long)), &["Assumption 2 fails (equal arms)", "rotor 3 has arm"]);
+    let long = [
+        (0.159, 0.159, 1),
+        (-0.159, 0.159, -1),
+        (-0.2, -0.2, 1),
+        (0.159, -0.159, -1),
+    ];
+    assert_error(
+        &format!("{HEADER}{}", rotors(&long)),
+        &["Assumption 2 fails (equal arms)", "rotor 3 has arm"],
+    );
 }
 
 #[test]
@@ -142,7 +212,13 @@ fn unequal_interior_angles() {
     // Equal arms, but rotors 1/4 at ±30° and 2/3 at ±150°: gaps of 60° and 120°.
     let (c, s) = (0.225 * 0.866_025_403_784_438_6, 0.225 * 0.5);
     let bent = [(c, s, 1), (-c, s, -1), (-c, -s, 1), (c, -s, -1)];
-    assert_error(&format!("{HEADER}{}", rotors(&bent)), &["Assumption 2 fails (equal interior angles)", "deg apart, expected 90.0000 deg"]);
+    assert_error(
+        &format!("{HEADER}{}", rotors(&bent)),
+        &[
+            "Assumption 2 fails (equal interior angles)",
+            "deg apart, expected 90.0000 deg",
+        ],
+    );
 }
 
 #[test]
@@ -152,34 +228,75 @@ fn asymmetric_layout() {
     let table: Vec<(f64, f64, i64)> = (0..4)
         .map(|k| {
             let phi = a + k as f64 * std::f64::consts::FRAC_PI_2;
-            (0.225 * phi.cos(), 0.225 * phi.sin(), if k % 2 == 0 { 1 } else { -1 })
+            (
+                0.225 * phi.cos(),
+                0.225 * phi.sin(),
+                if k % 2 == 0 { 1 } else { -1 },
+            )
         })
         .collect();
-    assert_error(&format!("{HEADER}{}", rotors(&table)), &["Assumption 2 fails (symmetric about the body x axis)", "rotor 1"]);
+    assert_error(
+        &format!("{HEADER}{}", rotors(&table)),
+        &[
+            "Assumption 2 fails (symmetric about the body x axis)",
+            "rotor 1",
+        ],
+    );
 }
 
 #[test]
 fn bad_spin_value() {
-    let bad = [(0.159, 0.159, 2), (-0.159, 0.159, -1), (-0.159, -0.159, 1), (0.159, -0.159, -1)];
-    assert_error(&format!("{HEADER}{}", rotors(&bad)), &["rotor 1", "spin = 2 must be +1 or -1"]);
+    let bad = [
+        (0.159, 0.159, 2),
+        (-0.159, 0.159, -1),
+        (-0.159, -0.159, 1),
+        (0.159, -0.159, -1),
+    ];
+    assert_error(
+        &format!("{HEADER}{}", rotors(&bad)),
+        &["rotor 1", "spin = 2 must be +1 or -1"],
+    );
 }
 
 #[test]
 fn canted_rotor() {
-    let text = format!("{HEADER}{}", rotors(&QUAD_X)).replacen("spin = 1\n", "spin = 1\ncant_deg = 10\n", 1);
-    assert_error(&text, &["Assumption 2 fails (uncanted rotors)", "rotor 1 is canted by 10 deg"]);
+    let text = format!("{HEADER}{}", rotors(&QUAD_X)).replacen(
+        "spin = 1\n",
+        "spin = 1\ncant_deg = 10\n",
+        1,
+    );
+    assert_error(
+        &text,
+        &[
+            "Assumption 2 fails (uncanted rotors)",
+            "rotor 1 is canted by 10 deg",
+        ],
+    );
 }
 
 #[test]
 fn rotor_off_the_rotor_plane() {
-    let text = format!("{HEADER}{}", rotors(&QUAD_X)).replacen("spin = 1\n", "spin = 1\nz = 0.05\n", 1);
-    assert_error(&text, &["Assumption 2 fails (coplanar rotors at one height)", "rotor 1 has z = 0.05 m"]);
+    let text =
+        format!("{HEADER}{}", rotors(&QUAD_X)).replacen("spin = 1\n", "spin = 1\nz = 0.05\n", 1);
+    assert_error(
+        &text,
+        &[
+            "Assumption 2 fails (coplanar rotors at one height)",
+            "rotor 1 has z = 0.05 m",
+        ],
+    );
 }
 
 #[test]
 fn preset_and_table_both_given() {
-    let text = format!("{HEADER}preset = \"quad_x\"\narm_length = 0.2\n{}", rotors(&QUAD_X));
-    assert_error(&text, &["give either `preset` or a [[rotors]] table, not both"]);
+    let text = format!(
+        "{HEADER}preset = \"quad_x\"\narm_length = 0.2\n{}",
+        rotors(&QUAD_X)
+    );
+    assert_error(
+        &text,
+        &["give either `preset` or a [[rotors]] table, not both"],
+    );
 }
 
 #[test]
@@ -189,18 +306,28 @@ fn no_rotors() {
 
 #[test]
 fn preset_without_arm_length() {
-    assert_error(&format!("{HEADER}preset = \"hexa_x\"\n"), &["`preset` needs `arm_length` (m)"]);
+    assert_error(
+        &format!("{HEADER}preset = \"hexa_x\"\n"),
+        &["`preset` needs `arm_length` (m)"],
+    );
 }
 
 #[test]
 fn unknown_preset() {
-    assert_error(&format!("{HEADER}preset = \"tricopter\"\narm_length = 0.2\n"), &["unknown variant `tricopter`"]);
+    assert_error(
+        &format!("{HEADER}preset = \"tricopter\"\narm_length = 0.2\n"),
+        &["unknown variant `tricopter`"],
+    );
 }
 
 #[test]
 fn missing_file_names_the_path() {
     let e = Vehicle::from_toml_file(std::path::Path::new("/nonexistent/v.toml")).unwrap_err();
-    assert!(e.to_string().starts_with("/nonexistent/v.toml: cannot read file"), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("/nonexistent/v.toml: cannot read file"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -1,0 +1,3 @@
+//! Reports of a fit: plots (seed Figure 3 and time histories).
+
+pub mod plots;

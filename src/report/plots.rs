@@ -1,0 +1,353 @@
+//! Plots of a fit (seed Figure 3 and time histories), as SVG and PNG with a bundled font
+//! (DejaVu Sans via `ab_glyph`), so they render on machines without system fonts.
+//!
+//! Every plot is written to a temporary file and renamed into place, so a failed run
+//! leaves no partial file.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::sample::Axis;
+
+/// A plot that could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: cannot write plot: {message}")]
+pub struct PlotError {
+    /// The file that was being written.
+    pub path: String,
+    /// What went wrong.
+    pub message: String,
+}
+
+/// Measured and predicted output of one axis over time.
+#[derive(Debug, Clone, Copy)]
+pub struct AxisSeries<'a> {
+    /// The axis (gives the unit).
+    pub axis: Axis,
+    /// Time, s.
+    pub t: &'a [f64],
+    /// Measured output (N or N m).
+    pub measured: &'a [f64],
+    /// Model output (N or N m).
+    pub predicted: &'a [f64],
+}
+
+/// Residual distribution of one axis: histogram as densities and the fitted Gaussian.
+#[derive(Debug, Clone)]
+pub struct ResidualDensity {
+    /// The axis (gives the unit).
+    pub axis: Axis,
+    /// Bin edges (N or N m), one more than `density`.
+    pub edges: Vec<f64>,
+    /// Probability density per bin (1/N or 1/(N m)).
+    pub density: Vec<f64>,
+    /// Mean of the fitted Gaussian (N or N m).
+    pub mean: f64,
+    /// Standard deviation of the fitted Gaussian (N or N m).
+    pub std: f64,
+}
+
+/// Ordered residuals against standard-normal quantiles for one axis (normal probability
+/// plot), with the correlation of the two (1 for perfectly Gaussian residuals).
+#[derive(Debug, Clone)]
+pub struct NormalProbability {
+    /// The axis (gives the unit).
+    pub axis: Axis,
+    /// `(standard normal quantile, ordered residual in N or N m)` pairs.
+    pub points: Vec<(f64, f64)>,
+    /// Correlation of the pairs.
+    pub correlation: f64,
+}
+
+const FONT: &str = "sans-serif";
+const SIZE: (u32, u32) = (1500, 1100);
+/// Points drawn per series: longer series are reduced to per-bucket min/max.
+const MAX_POINTS: usize = 3000;
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The bundled DejaVu Sans is valid TrueType; failure would be a build defect.
+        let _ = plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular());
+    });
+}
+
+/// What to draw on a 3 × 2 grid of axis panels.
+enum Figure<'a> {
+    TimeHistories(&'a [AxisSeries<'a>]),
+    Densities(&'a [ResidualDensity]),
+    NormalProbability(&'a [NormalProbability]),
+}
+
+impl Figure<'_> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        title: &str,
+    ) -> Result<(), String> {
+        match self {
+            Self::TimeHistories(s) => draw_time_histories(root, title, s),
+            Self::Densities(d) => draw_densities(root, title, d),
+            Self::NormalProbability(n) => draw_normal_probability(root, title, n),
+        }
+    }
+}
+
+/// Writes `stem.svg` and `stem.png` of `figure`, each through a temporary file.
+fn write_both(stem: &Path, title: &str, figure: Figure) -> Result<Vec<PathBuf>, PlotError> {
+    register_font();
+    let svg = stem.with_extension("svg");
+    let png = stem.with_extension("png");
+    let err = |p: &Path, m: String| PlotError {
+        path: p.display().to_string(),
+        message: m,
+    };
+    let tmp_svg = stem.with_extension("svg.partial");
+    {
+        let root = SVGBackend::new(&tmp_svg, SIZE).into_drawing_area();
+        figure.draw(&root, title).map_err(|m| err(&svg, m))?;
+        root.present().map_err(|e| err(&svg, e.to_string()))?;
+    }
+    let tmp_png = stem.with_extension("partial.png");
+    {
+        let root = BitMapBackend::new(&tmp_png, SIZE).into_drawing_area();
+        figure.draw(&root, title).map_err(|m| err(&png, m))?;
+        root.present().map_err(|e| err(&png, e.to_string()))?;
+    }
+    std::fs::rename(&tmp_svg, &svg).map_err(|e| err(&svg, e.to_string()))?;
+    std::fs::rename(&tmp_png, &png).map_err(|e| err(&png, e.to_string()))?;
+    Ok(vec![svg, png])
+}
+
+/// Measured vs predicted output over time, one panel per axis: `stem.svg`, `stem.png`.
+pub fn time_histories(
+    stem: &Path,
+    title: &str,
+    series: &[AxisSeries],
+) -> Result<Vec<PathBuf>, PlotError> {
+    write_both(stem, title, Figure::TimeHistories(series))
+}
+
+/// Residual histograms with fitted Gaussians (seed Figure 3), one panel per axis.
+pub fn residual_densities(
+    stem: &Path,
+    title: &str,
+    axes: &[ResidualDensity],
+) -> Result<Vec<PathBuf>, PlotError> {
+    write_both(stem, title, Figure::Densities(axes))
+}
+
+/// Normal probability plots (ordered residual vs inverse normal CDF), one panel per axis.
+pub fn normal_probability(
+    stem: &Path,
+    title: &str,
+    axes: &[NormalProbability],
+) -> Result<Vec<PathBuf>, PlotError> {
+    write_both(stem, title, Figure::NormalProbability(axes))
+}
+
+fn panels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+) -> Result<Vec<DrawingArea<DB, Shift>>, String> {
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let root = root
+        .titled(title, (FONT, 30).into_font())
+        .map_err(|e| e.to_string())?;
+    Ok(root.split_evenly((3, 2)))
+}
+
+fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if !lo.is_finite() {
+        return (-1.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(1e-9 * (1.0 + lo.abs().max(hi.abs())));
+    (lo - pad, hi + pad)
+}
+
+/// Reduces a series to at most ~`MAX_POINTS` points keeping each bucket's min and max.
+fn decimate(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
+    let n = t.len().min(y.len());
+    if n <= MAX_POINTS {
+        return t.iter().zip(y).map(|(&a, &b)| (a, b)).collect();
+    }
+    let bucket = n.div_ceil(MAX_POINTS / 2);
+    let mut out = Vec::with_capacity(MAX_POINTS + 2);
+    for start in (0..n).step_by(bucket) {
+        let end = (start + bucket).min(n);
+        let (mut imin, mut imax) = (start, start);
+        for i in start..end {
+            if y[i] < y[imin] {
+                imin = i;
+            }
+            if y[i] > y[imax] {
+                imax = i;
+            }
+        }
+        let (a, b) = if imin < imax {
+            (imin, imax)
+        } else {
+            (imax, imin)
+        };
+        out.push((t[a], y[a]));
+        out.push((t[b], y[b]));
+    }
+    out
+}
+
+fn draw_time_histories<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    series: &[AxisSeries],
+) -> Result<(), String> {
+    for (area, s) in panels(root, title)?.iter().zip(series) {
+        let (t0, t1) = range(s.t.iter().copied());
+        let (y0, y1) = range(s.measured.iter().chain(s.predicted).copied());
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .caption(s.axis.name(), (FONT, 24))
+            .build_cartesian_2d(t0..t1, y0..y1)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("time [s]")
+            .y_desc(format!("{} [{}]", s.axis.name(), s.axis.unit()))
+            .label_style((FONT, 16))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(LineSeries::new(
+                decimate(s.t, s.measured),
+                BLACK.stroke_width(1),
+            ))
+            .map_err(|e| e.to_string())?
+            .label("measured")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK));
+        chart
+            .draw_series(LineSeries::new(
+                decimate(s.t, s.predicted),
+                RED.stroke_width(1),
+            ))
+            .map_err(|e| e.to_string())?
+            .label("model")
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED));
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 16))
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+fn gaussian(x: f64, mean: f64, std: f64) -> f64 {
+    let z = (x - mean) / std;
+    (-0.5 * z * z).exp() / (std * (2.0 * std::f64::consts::PI).sqrt())
+}
+
+fn draw_densities<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    axes: &[ResidualDensity],
+) -> Result<(), String> {
+    for (area, d) in panels(root, title)?.iter().zip(axes) {
+        let (x0, x1) = range(d.edges.iter().copied());
+        let peak = d.density.iter().copied().fold(0.0, f64::max);
+        let curve_peak = if d.std > 0.0 {
+            gaussian(d.mean, d.mean, d.std)
+        } else {
+            0.0
+        };
+        let y1 = peak.max(curve_peak).max(f64::MIN_POSITIVE) * 1.1;
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .caption(format!("{} residual", d.axis.name()), (FONT, 24))
+            .build_cartesian_2d(x0..x1, 0.0..y1)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("residual [{}]", d.axis.unit()))
+            .y_desc(format!("probability density [1/{}]", d.axis.unit()))
+            .label_style((FONT, 16))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let bars = d
+            .edges
+            .windows(2)
+            .zip(&d.density)
+            .map(|(e, &h)| Rectangle::new([(e[0], 0.0), (e[1], h)], BLUE.mix(0.35).filled()));
+        chart.draw_series(bars).map_err(|e| e.to_string())?;
+        if d.std > 0.0 {
+            let curve = (0..=200).map(|i| {
+                let x = x0 + (x1 - x0) * i as f64 / 200.0;
+                (x, gaussian(x, d.mean, d.std))
+            });
+            chart
+                .draw_series(LineSeries::new(curve, RED.stroke_width(2)))
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(())
+}
+
+fn draw_normal_probability<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    axes: &[NormalProbability],
+) -> Result<(), String> {
+    for (area, np) in panels(root, title)?.iter().zip(axes) {
+        let (x0, x1) = range(np.points.iter().map(|p| p.0));
+        let (y0, y1) = range(np.points.iter().map(|p| p.1));
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .caption(
+                format!("{} (correlation {:.4})", np.axis.name(), np.correlation),
+                (FONT, 24),
+            )
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("standard normal quantile [-]")
+            .y_desc(format!("ordered residual [{}]", np.axis.unit()))
+            .label_style((FONT, 16))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(np.points.iter().map(|&p| Circle::new(p, 2, BLUE.filled())))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimation_keeps_extremes_and_bounds_point_count() {
+        let t: Vec<f64> = (0..100_000).map(|i| i as f64 * 1e-3).collect();
+        let mut y: Vec<f64> = t.iter().map(|x| x.sin()).collect();
+        y[54_321] = 10.0;
+        y[7] = -10.0;
+        let d = decimate(&t, &y);
+        assert!(d.len() <= MAX_POINTS + 2, "{}", d.len());
+        assert!(d.iter().any(|p| p.1 == 10.0) && d.iter().any(|p| p.1 == -10.0));
+    }
+}
