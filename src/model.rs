@@ -157,7 +157,8 @@ pub struct Parameter {
 }
 
 /// How the inflow-correction terms are built.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum InflowCorrection {
     /// From per-rotor sums over the vehicle's positions and spins (exact for any
     /// Assumption 2 layout and spin assignment).
@@ -168,7 +169,8 @@ pub enum InflowCorrection {
 }
 
 /// Treatment of the J_z gyroscopic and motor-torque terms (Eq. 16).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum RotorInertiaTerms {
     /// J_z from the vehicle file; the terms are subtracted from the measured moments.
     #[default]
@@ -180,7 +182,8 @@ pub enum RotorInertiaTerms {
 }
 
 /// Variant of the Eq. 22 structure.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ModelOptions {
     /// Inflow-correction form.
     pub inflow: InflowCorrection,
@@ -459,7 +462,11 @@ impl ModelStructure {
         for axis in Axis::ALL {
             let a = axis as usize;
             let dst = &mut outputs[a * cap..a * cap + n];
-            dst.copy_from_slice(&chunk.wrench[a][..n]);
+            // A chunk without measured outputs (prediction only) counts them as zero.
+            match chunk.wrench[a].get(..n) {
+                Some(z) => dst.copy_from_slice(z),
+                None => dst.fill(0.0),
+            }
             for t in &self.known[a] {
                 apply_term(dst, t, false, -1.0, &lookup);
             }

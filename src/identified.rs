@@ -1,0 +1,204 @@
+//! An identified model: vehicle, Eq. 22 variant and estimated parameters, saved as a TOML
+//! model file and evaluated by downstream tools (`predict(state, rotor speeds) -> F, M`).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::{ModelError, ModelOptions, ModelStructure, Workspace};
+use crate::sample::{Axis, Sample, SampleChunk};
+use crate::vehicle::{Vehicle, VehicleDefinition, VehicleSource};
+
+/// Version of the model-file layout written by [`IdentifiedModel::save`].
+pub const MODEL_FILE_VERSION: u32 = 1;
+
+/// One estimated parameter as stored in the model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParameterEstimate {
+    /// Parameter name (e.g. `C_T0`).
+    pub name: String,
+    /// Unit of the estimate ("-" for dimensionless).
+    pub unit: String,
+    /// Estimate θ̂.
+    pub estimate: f64,
+    /// Standard deviation σ(θ̂), same unit.
+    pub std: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFile {
+    schema_version: u32,
+    vehicle: VehicleDefinition,
+    model: ModelOptions,
+    parameters: Vec<ParameterEstimate>,
+}
+
+/// A model file that could not be read or written.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct ModelFileError {
+    /// The file.
+    pub path: PathBuf,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Vehicle + model structure + estimated parameters.
+#[derive(Debug, Clone)]
+pub struct IdentifiedModel {
+    /// The vehicle.
+    pub vehicle: Vehicle,
+    /// The model structure the parameters belong to.
+    pub structure: ModelStructure,
+    /// Estimates and standard deviations, in `structure.params` order.
+    pub parameters: Vec<ParameterEstimate>,
+}
+
+impl IdentifiedModel {
+    /// A model from a structure and its estimates `theta` with standard deviations `std`
+    /// (both in `structure.params` order).
+    pub fn new(vehicle: Vehicle, structure: ModelStructure, theta: &[f64], std: &[f64]) -> Self {
+        let parameters = structure
+            .params
+            .iter()
+            .zip(theta.iter().zip(std))
+            .map(|(p, (&estimate, &std))| ParameterEstimate {
+                name: p.name.clone(),
+                unit: p.unit.clone(),
+                estimate,
+                std,
+            })
+            .collect();
+        Self {
+            vehicle,
+            structure,
+            parameters,
+        }
+    }
+
+    /// θ̂ in `structure.params` order.
+    pub fn theta(&self) -> Vec<f64> {
+        self.parameters.iter().map(|p| p.estimate).collect()
+    }
+
+    /// Reads a model file written by [`IdentifiedModel::save`].
+    pub fn load(path: &Path) -> Result<Self, ModelFileError> {
+        let err = |message: String| ModelFileError {
+            path: path.to_path_buf(),
+            message,
+        };
+        let text =
+            std::fs::read_to_string(path).map_err(|e| err(format!("cannot read file: {e}")))?;
+        let file: ModelFile = toml::from_str(&text)
+            .map_err(|e| err(format!("not a model file: {}", e.message().trim())))?;
+        if file.schema_version != MODEL_FILE_VERSION {
+            return Err(err(format!(
+                "schema_version {} is not supported (this build reads {MODEL_FILE_VERSION})",
+                file.schema_version
+            )));
+        }
+        let vehicle =
+            Vehicle::from_definition(file.vehicle, VehicleSource::File(path.to_path_buf()))
+                .map_err(|e| err(format!("[vehicle]: {}", e.kind)))?;
+        let structure = ModelStructure::eq22(&vehicle, file.model);
+        let names: Vec<&str> = structure.params.iter().map(|p| p.name.as_str()).collect();
+        let stored: Vec<&str> = file.parameters.iter().map(|p| p.name.as_str()).collect();
+        if names != stored {
+            return Err(err(format!(
+                "parameters [{}] do not match the model's [{}]",
+                stored.join(", "),
+                names.join(", ")
+            )));
+        }
+        if let Some(p) = file.parameters.iter().find(|p| !p.estimate.is_finite()) {
+            return Err(err(format!(
+                "parameter `{}`: estimate is not a finite number",
+                p.name
+            )));
+        }
+        Ok(Self {
+            vehicle,
+            structure,
+            parameters: file.parameters,
+        })
+    }
+
+    /// Writes the model file (through a temporary file, so no partial file is left).
+    pub fn save(&self, path: &Path) -> Result<(), ModelFileError> {
+        let err = |message: String| ModelFileError {
+            path: path.to_path_buf(),
+            message,
+        };
+        let file = ModelFile {
+            schema_version: MODEL_FILE_VERSION,
+            vehicle: self.vehicle.definition(),
+            model: self.structure.options,
+            parameters: self.parameters.clone(),
+        };
+        let text = toml::to_string(&file).map_err(|e| err(e.to_string()))?;
+        write_atomically(path, text.as_bytes()).map_err(|e| err(format!("cannot write file: {e}")))
+    }
+
+    /// Force (N) and moment (N m) in body axes for body velocity `velocity` (m/s, air
+    /// relative), rates `rates` (rad/s), rotor speeds `omega` (rad/s) and rotor
+    /// accelerations `omega_dot` (rad/s², needed when J_z terms are modelled).
+    pub fn predict(
+        &self,
+        velocity: [f64; 3],
+        rates: [f64; 3],
+        omega: &[f64],
+        omega_dot: &[f64],
+    ) -> Result<([f64; 3], [f64; 3]), ModelError> {
+        let sample = Sample {
+            velocity,
+            rates,
+            omega: omega.to_vec(),
+            omega_dot: omega_dot.to_vec(),
+            ..Sample::default()
+        };
+        let y = self.structure.predict(&self.theta(), &sample)?;
+        Ok(([y[0], y[1], y[2]], [y[3], y[4], y[5]]))
+    }
+
+    /// Model output for every sample of `chunk`, in [`Axis`] order (N, N m), using `ws`
+    /// as scratch space.
+    pub fn predict_chunk(
+        &self,
+        chunk: &SampleChunk,
+        ws: &mut Workspace,
+    ) -> Result<[Vec<f64>; 6], ModelError> {
+        self.structure.assemble(chunk, ws)?;
+        let theta = self.theta();
+        let mut y: [Vec<f64>; 6] = Default::default();
+        for axis in Axis::ALL {
+            let a = axis as usize;
+            // Known terms: measured − corrected output.
+            let mut out: Vec<f64> = chunk.wrench[a]
+                .iter()
+                .zip(ws.output(axis))
+                .map(|(z, c)| z - c)
+                .collect();
+            for j in self.structure.axis_columns(axis) {
+                let th = theta[self.structure.columns[j].param];
+                out.iter_mut()
+                    .zip(ws.column(j))
+                    .for_each(|(o, x)| *o += th * x);
+            }
+            y[a] = out;
+        }
+        Ok(y)
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".partial");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}

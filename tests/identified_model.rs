@@ -1,0 +1,130 @@
+//! Model files: save → load round trip, predictions equal the structure's, bad files are
+//! refused with the file named.
+
+use mrsysid::identified::IdentifiedModel;
+use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::rotor::BladeConstants;
+use mrsysid::sample::{Sample, SampleChunk};
+use mrsysid::vehicle::Vehicle;
+
+fn quad() -> Vehicle {
+    Vehicle::from_toml_file(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/vehicles/quad_x.toml"),
+    )
+    .unwrap()
+}
+
+fn model() -> IdentifiedModel {
+    let v = quad();
+    let s = ModelStructure::eq22(&v, ModelOptions::default());
+    let blade = BladeConstants {
+        blades: 2.0,
+        chord: 0.012,
+        lift_slope: 5.7,
+        mean_drag: 0.012,
+        theta0: 0.3,
+        theta_tw: -0.1,
+        c_nu_mu: -0.1,
+        c_nu_w: 0.3,
+    };
+    let lumped = blade.lumped_parameters(v.props.rotor_radius);
+    let theta: Vec<f64> = s
+        .params
+        .iter()
+        .map(|p| lumped.value(&p.name).unwrap())
+        .collect();
+    let std: Vec<f64> = theta.iter().map(|t| t.abs() * 0.01).collect();
+    IdentifiedModel::new(v, s, &theta, &std)
+}
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("mrsysid-{}-{name}", std::process::id()))
+}
+
+#[test]
+fn round_trip_preserves_predictions_exactly() {
+    let m = model();
+    let path = tmp("model.toml");
+    m.save(&path).unwrap();
+    let back = IdentifiedModel::load(&path).unwrap();
+    assert_eq!(back.parameters, m.parameters);
+    let omega = [900.0, 950.0, 1000.0, 1050.0];
+    let a = m
+        .predict([5.0, -1.0, 0.5], [0.3, -0.2, 0.1], &omega, &[10.0; 4])
+        .unwrap();
+    let b = back
+        .predict([5.0, -1.0, 0.5], [0.3, -0.2, 0.1], &omega, &[10.0; 4])
+        .unwrap();
+    // TOML stores f64 with round-trip precision, so predictions are bit-identical.
+    assert_eq!(a, b);
+    // Equal rotor speeds at rest give upward thrust (F_z < 0) and zero moments; at
+    // 2000 rad/s (λ = ν0/ΩR ≈ 0.077) these blade constants lift.
+    let (f, mo) = back
+        .predict([0.0; 3], [0.0; 3], &[2000.0; 4], &[0.0; 4])
+        .unwrap();
+    assert!(f[2] < -1.0, "{f:?}");
+    assert!(mo.iter().all(|x| x.abs() < 1e-9), "{mo:?}");
+}
+
+#[test]
+fn chunk_prediction_equals_single_sample_prediction() {
+    let m = model();
+    let s = Sample {
+        velocity: [3.0, 2.0, -1.0],
+        rates: [1.0, 0.5, -0.2],
+        omega: vec![800.0, 1100.0, 900.0, 1000.0],
+        omega_dot: vec![50.0, -20.0, 0.0, 5.0],
+        ..Sample::default()
+    };
+    let mut chunk = SampleChunk::with_capacity(4, 1, true);
+    chunk.push(&s);
+    let y = m.predict_chunk(&chunk, &mut Workspace::default()).unwrap();
+    let (f, mo) = m
+        .predict(s.velocity, s.rates, &s.omega, &s.omega_dot)
+        .unwrap();
+    for (a, v) in f.iter().chain(&mo).enumerate() {
+        assert!(
+            (y[a][0] - v).abs() <= 1e-12 * v.abs().max(1e-9),
+            "axis {a}: {} vs {v}",
+            y[a][0]
+        );
+    }
+}
+
+#[test]
+fn bad_model_files_name_the_file_and_problem() {
+    let m = model();
+    let path = tmp("bad.toml");
+    m.save(&path).unwrap();
+    let good = std::fs::read_to_string(&path).unwrap();
+    let cases = [
+        (
+            good.replace("schema_version = 1", "schema_version = 9"),
+            "schema_version 9 is not supported",
+        ),
+        (
+            good.replacen("name = \"C_T0\"", "name = \"C_X\"", 1),
+            "do not match the model's",
+        ),
+        (
+            good.replacen("mass = 1.2", "mass = -1.2", 1),
+            "[vehicle]: field `mass` = -1.2",
+        ),
+        ("not toml at all =".to_string(), "not a model file"),
+    ];
+    for (text, expected) in cases {
+        std::fs::write(&path, text).unwrap();
+        let e = IdentifiedModel::load(&path).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&path.display().to_string()) && e.contains(expected),
+            "{e}"
+        );
+    }
+    let missing = IdentifiedModel::load(std::path::Path::new("/nonexistent/m.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        missing.contains("/nonexistent/m.toml: cannot read file"),
+        "{missing}"
+    );
+}
