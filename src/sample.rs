@@ -150,6 +150,35 @@ impl SampleChunk {
         }
     }
 
+    /// Appends samples `range` of `src` (same rotor count and optional signals).
+    pub fn extend_from(&mut self, src: &SampleChunk, range: std::ops::Range<usize>) {
+        fn ext(dst: &mut Vec<f64>, src: &[f64], r: &std::ops::Range<usize>) {
+            if let Some(s) = src.get(r.clone()) {
+                dst.extend_from_slice(s);
+            }
+        }
+        ext(&mut self.t, &src.t, &range);
+        for k in 0..3 {
+            ext(&mut self.velocity[k], &src.velocity[k], &range);
+            ext(&mut self.rates[k], &src.rates[k], &range);
+        }
+        let rotors = |dst: &mut Vec<Vec<f64>>, src: &[Vec<f64>]| {
+            dst.resize_with(src.len(), Vec::new);
+            for (d, s) in dst.iter_mut().zip(src) {
+                ext(d, s, &range);
+            }
+        };
+        rotors(&mut self.omega, &src.omega);
+        rotors(&mut self.omega_dot, &src.omega_dot);
+        for (d, s) in self.wrench.iter_mut().zip(&src.wrench) {
+            ext(d, s, &range);
+        }
+        ext(&mut self.height, &src.height, &range);
+        for (d, s) in self.attitude.iter_mut().zip(&src.attitude) {
+            ext(d, s, &range);
+        }
+    }
+
     /// Copies sample `k` out of the chunk.
     pub fn sample(&self, k: usize) -> Sample {
         Sample {
@@ -163,6 +192,34 @@ impl SampleChunk {
             attitude: (!self.attitude[0].is_empty())
                 .then(|| self.attitude.each_ref().map(|v| v[k])),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extend_from_copies_exactly_the_range() {
+        let mut a = SampleChunk::with_capacity(2, 4, true);
+        for k in 0..4 {
+            let x = k as f64;
+            a.push(&Sample {
+                t: x,
+                velocity: [x, x + 1.0, x + 2.0],
+                rates: [x; 3],
+                omega: vec![100.0 + x, 200.0 + x],
+                omega_dot: vec![x, -x],
+                wrench: [x; 6],
+                height: None,
+                attitude: None,
+            });
+        }
+        let mut b = SampleChunk::with_capacity(2, 4, true);
+        b.extend_from(&a, 1..3);
+        assert_eq!(b.len(), 2);
+        assert_eq!(b.sample(0), a.sample(1));
+        assert_eq!(b.sample(1), a.sample(2));
     }
 }
 
