@@ -82,16 +82,32 @@ pub enum Signal {
     SumSigmaYOmega,
     /// Σ σ_i x_i Ω_i, m rad/s.
     SumSigmaXOmega,
+    /// |u|, m/s.
+    AbsU,
+    /// |v|, m/s.
+    AbsV,
+    /// |w|, m/s.
+    AbsW,
+    /// Speed Ω_i of rotor `i` (0-based), rad/s.
+    RotorSpeed(u8),
+    /// Ω_i² of rotor `i` (0-based), rad²/s².
+    RotorSpeedSquared(u8),
+    /// Ω̇_i of rotor `i` (0-based), rad/s².
+    RotorAcceleration(u8),
+    /// Rate of change of δ² = M_ix Ω² for one row of Eq. 20: M_ix,row (2 Ω ∘ Ω̇), in the
+    /// unit of that δ² per second.
+    SquaredActuatorRate(u8),
+    /// Ground-effect factor g = s/(1 − s), s = (R/(4 z_r))², z_r = CG height + h the
+    /// rotor-plane height above ground (Cheeseman–Bennett: T_IGE = T (1 + g)); z_r is
+    /// held at ≥ R/2 (s ≤ 1/4). Dimensionless; needs the `height` signal.
+    GroundEffect,
 }
-
-/// Number of [`Signal`] variants.
-pub const SIGNAL_COUNT: usize = 21;
 
 impl Signal {
     /// ASCII symbol used in column labels.
-    pub fn symbol(self) -> &'static str {
+    pub fn symbol(self) -> String {
         use Signal::*;
-        match self {
+        let fixed = match self {
             U => "u",
             V => "v",
             W => "w",
@@ -113,7 +129,27 @@ impl Signal {
             SumX2Omega => "Sum(x^2 W)",
             SumSigmaYOmega => "Sum(s y W)",
             SumSigmaXOmega => "Sum(s x W)",
-        }
+            AbsU => "|u|",
+            AbsV => "|v|",
+            AbsW => "|w|",
+            GroundEffect => "g_IGE",
+            RotorSpeed(i) => return format!("W{}", i + 1),
+            RotorSpeedSquared(i) => return format!("W{}^2", i + 1),
+            RotorAcceleration(i) => return format!("W{}_dot", i + 1),
+            SquaredActuatorRate(row) => {
+                return format!("d2{}_dot", ["t", "a", "e", "r"][usize::from(row) % 4]);
+            }
+        };
+        fixed.to_string()
+    }
+
+    /// True when the signal is read straight from the chunk (no computation).
+    fn is_direct(self) -> bool {
+        use Signal::*;
+        matches!(
+            self,
+            U | V | W | P | Q | R | RotorSpeed(_) | RotorAcceleration(_)
+        )
     }
 }
 
@@ -227,6 +263,11 @@ pub enum ModelError {
         /// Rotor series in the data.
         found: usize,
     },
+    /// The model needs the CG height (ground-effect term) and the data has none.
+    #[error(
+        "the model needs the CG height above ground (ground-effect term) but the data has no `height`"
+    )]
+    MissingHeight,
     /// The model needs rotor accelerations (J_z δ̇r term) and the data has none.
     #[error(
         "the model needs rotor accelerations (the J_z * dr_dot term of Eq. 22f) but the data has none; derive them, or neglect the J_z terms"
@@ -250,6 +291,9 @@ pub struct ModelStructure {
     inflow_weights: [Vec<f64>; 5],
     /// Signals any column or known term uses (kept in step with the columns).
     required: Vec<Signal>,
+    /// Rotor radius R and hub height h, m (for the ground-effect signal).
+    rotor_radius: f64,
+    hub_height: f64,
 }
 
 /// Constants of one vehicle that the Eq. 22 coefficients use.
@@ -355,6 +399,8 @@ impl ModelStructure {
             mixing: Mixing::new(vehicle),
             inflow_weights,
             required: Vec::new(),
+            rotor_radius: props.rotor_radius,
+            hub_height: props.hub_height,
         };
         structure.required = structure.collect_required_signals();
         structure
@@ -381,7 +427,12 @@ impl ModelStructure {
 
     /// True when assembling needs rotor accelerations.
     pub fn needs_omega_dot(&self) -> bool {
-        self.required.contains(&Signal::DrDot)
+        self.required.iter().any(|s| {
+            matches!(
+                s,
+                Signal::DrDot | Signal::RotorAcceleration(_) | Signal::SquaredActuatorRate(_)
+            )
+        })
     }
 
     fn all_terms(&self) -> impl Iterator<Item = &Term> {
@@ -431,6 +482,9 @@ impl ModelStructure {
         if self.needs_omega_dot() && !chunk.has_omega_dot() {
             return Err(ModelError::MissingRotorAcceleration);
         }
+        if self.required.contains(&Signal::GroundEffect) && chunk.height.len() != chunk.len() {
+            return Err(ModelError::MissingHeight);
+        }
         Ok(())
     }
 
@@ -440,9 +494,11 @@ impl ModelStructure {
     pub fn assemble(&self, chunk: &SampleChunk, ws: &mut Workspace) -> Result<(), ModelError> {
         self.check_chunk(chunk)?;
         let n = chunk.len();
-        ws.prepare(n, self.columns.len());
-        for &s in &self.required {
-            self.compute_signal(s, chunk, ws);
+        ws.prepare(n, self.columns.len(), self.required.len());
+        for (slot, &s) in self.required.iter().enumerate() {
+            if !s.is_direct() {
+                self.compute_signal(s, chunk, ws, slot);
+            }
         }
         let Workspace {
             signals,
@@ -452,7 +508,11 @@ impl ModelStructure {
             ..
         } = ws;
         let cap = *capacity;
-        let lookup = |s: Signal| signal_slice(s, chunk, signals, cap, n);
+        let required = &self.required;
+        let lookup = |s: Signal| {
+            let slot = required.binary_search(&s).expect("required signal");
+            signal_slice(s, chunk, signals, slot * cap, n)
+        };
         for (j, col) in self.columns.iter().enumerate() {
             let dst = &mut columns[j * cap..j * cap + n];
             for (i, t) in col.terms.iter().enumerate() {
@@ -474,39 +534,58 @@ impl ModelStructure {
         Ok(())
     }
 
-    fn compute_signal(&self, s: Signal, chunk: &SampleChunk, ws: &mut Workspace) {
+    fn compute_signal(&self, s: Signal, chunk: &SampleChunk, ws: &mut Workspace, slot: usize) {
         use crate::mixing::VirtualActuator as A;
         use Signal::*;
         let n = chunk.len();
         let cap = ws.capacity;
-        let dst = &mut ws.signals[s as usize * cap..s as usize * cap + n];
+        let dst = &mut ws.signals[slot * cap..slot * cap + n];
+        let rows = [A::Thrust, A::Aileron, A::Elevator, A::Rudder];
         match s {
-            U | V | W | P | Q | R => {}
+            U | V | W | P | Q | R | RotorSpeed(_) | RotorAcceleration(_) => {}
             Vh => {
                 let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
                 for ((d, &a), &b) in dst.iter_mut().zip(u).zip(v) {
                     *d = (a * a + b * b).sqrt();
                 }
             }
-            Dt | Da | De | Dr | D2t | D2a | D2e | D2r => {
-                let (row, square) = match s {
-                    Dt => (A::Thrust, false),
-                    Da => (A::Aileron, false),
-                    De => (A::Elevator, false),
-                    Dr => (A::Rudder, false),
-                    D2t => (A::Thrust, true),
-                    D2a => (A::Aileron, true),
-                    D2e => (A::Elevator, true),
-                    _ => (A::Rudder, true),
-                };
-                mix_row(self.mixing.row(row), &chunk.omega, square, dst);
+            Dt | Da | De | Dr => {
+                let row = rows[s_index(s, Dt)];
+                mix_row(self.mixing.row(row), &chunk.omega, false, dst);
             }
-            DrDot => {
-                mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst);
+            D2t | D2a | D2e | D2r => {
+                let row = rows[s_index(s, D2t)];
+                mix_row(self.mixing.row(row), &chunk.omega, true, dst);
             }
+            DrDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst),
             SumY2Omega | SumXYOmega | SumX2Omega | SumSigmaYOmega | SumSigmaXOmega => {
-                let w = &self.inflow_weights[s as usize - SumY2Omega as usize];
+                let w = &self.inflow_weights[s_index(s, SumY2Omega)];
                 mix_row(w, &chunk.omega, false, dst);
+            }
+            AbsU | AbsV | AbsW => {
+                let src = &chunk.velocity[s_index(s, AbsU)][..n];
+                dst.iter_mut().zip(src).for_each(|(d, x)| *d = x.abs());
+            }
+            RotorSpeedSquared(i) => {
+                let src = &chunk.omega[usize::from(i)][..n];
+                dst.iter_mut().zip(src).for_each(|(d, x)| *d = x * x);
+            }
+            SquaredActuatorRate(row) => {
+                dst.fill(0.0);
+                let weights = self.mixing.row(rows[usize::from(row) % 4]);
+                for ((&m, w), wd) in weights.iter().zip(&chunk.omega).zip(&chunk.omega_dot) {
+                    let pairs = w[..n].iter().zip(&wd[..n]);
+                    dst.iter_mut()
+                        .zip(pairs)
+                        .for_each(|(d, (a, b))| *d += 2.0 * m * a * b);
+                }
+            }
+            GroundEffect => {
+                let (r, h) = (self.rotor_radius, self.hub_height);
+                let src = &chunk.height[..n];
+                dst.iter_mut()
+                    .zip(src)
+                    .for_each(|(d, z)| *d = ground_effect_factor(r, z + h));
             }
         }
     }
@@ -832,12 +911,46 @@ fn rotor_inertia_terms(b: &mut Builder, o: ModelOptions, jz: f64) -> [Vec<Term>;
     known
 }
 
-/// The values of signal `s` for the `n` samples of `chunk`.
+/// Position of a fieldless signal in its block of consecutive variants starting at
+/// `first` (e.g. δa in δt, δa, δe, δr).
+fn s_index(s: Signal, first: Signal) -> usize {
+    let order = [
+        Signal::Dt,
+        Signal::Da,
+        Signal::De,
+        Signal::Dr,
+        Signal::D2t,
+        Signal::D2a,
+        Signal::D2e,
+        Signal::D2r,
+        Signal::SumY2Omega,
+        Signal::SumXYOmega,
+        Signal::SumX2Omega,
+        Signal::SumSigmaYOmega,
+        Signal::SumSigmaXOmega,
+        Signal::AbsU,
+        Signal::AbsV,
+        Signal::AbsW,
+    ];
+    let at = |x| order.iter().position(|&o| o == x).expect("signal in block");
+    at(s) - at(first)
+}
+
+/// Ground-effect factor g = s/(1 − s), s = (R/(4 z_r))², z_r ≥ R/2 (see
+/// [`Signal::GroundEffect`]).
+pub fn ground_effect_factor(rotor_radius: f64, rotor_height: f64) -> f64 {
+    let z = rotor_height.max(rotor_radius / 2.0);
+    let s = (rotor_radius / (4.0 * z)).powi(2);
+    s / (1.0 - s)
+}
+
+/// The values of signal `s` for the `n` samples of `chunk`; computed signals live at
+/// `offset` in `signals`.
 fn signal_slice<'a>(
     s: Signal,
     chunk: &'a SampleChunk,
     signals: &'a [f64],
-    cap: usize,
+    offset: usize,
     n: usize,
 ) -> &'a [f64] {
     use Signal::*;
@@ -848,7 +961,9 @@ fn signal_slice<'a>(
         P => &chunk.rates[0][..n],
         Q => &chunk.rates[1][..n],
         R => &chunk.rates[2][..n],
-        _ => &signals[s as usize * cap..s as usize * cap + n],
+        RotorSpeed(i) => &chunk.omega[usize::from(i)][..n],
+        RotorAcceleration(i) => &chunk.omega_dot[usize::from(i)][..n],
+        _ => &signals[offset..offset + n],
     }
 }
 
@@ -923,6 +1038,7 @@ pub struct Workspace {
     capacity: usize,
     len: usize,
     n_columns: usize,
+    n_signals: usize,
 }
 
 impl Workspace {
@@ -930,16 +1046,17 @@ impl Workspace {
     /// columns.
     pub fn new(capacity: usize, n_columns: usize) -> Self {
         let mut ws = Self::default();
-        ws.prepare(capacity, n_columns);
+        ws.prepare(capacity, n_columns, 32);
         ws.len = 0;
         ws
     }
 
-    fn prepare(&mut self, n: usize, n_columns: usize) {
-        if n > self.capacity || n_columns > self.n_columns {
+    fn prepare(&mut self, n: usize, n_columns: usize, n_signals: usize) {
+        if n > self.capacity || n_columns > self.n_columns || n_signals > self.n_signals {
             self.capacity = self.capacity.max(n);
             self.n_columns = self.n_columns.max(n_columns);
-            self.signals.resize(SIGNAL_COUNT * self.capacity, 0.0);
+            self.n_signals = self.n_signals.max(n_signals);
+            self.signals.resize(self.n_signals * self.capacity, 0.0);
             self.columns.resize(self.n_columns * self.capacity, 0.0);
             self.outputs.resize(6 * self.capacity, 0.0);
         }
@@ -965,5 +1082,88 @@ impl Workspace {
     pub fn output(&self, axis: Axis) -> &[f64] {
         let a = axis as usize;
         &self.outputs[a * self.capacity..a * self.capacity + self.len]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vehicle::{MassAndRotorProperties, Preset};
+
+    fn quad() -> Vehicle {
+        let props = MassAndRotorProperties {
+            mass: 1.0,
+            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
+            air_density: 1.2,
+            rotor_radius: 0.1,
+            hub_height: 0.05,
+            rotor_inertia: 0.0,
+        };
+        Vehicle::preset("q", Preset::QuadX, 0.25, 1.0, props).unwrap()
+    }
+
+    #[test]
+    fn candidate_signals_evaluate_as_documented() {
+        use Signal::*;
+        let v = quad();
+        let mut s = ModelStructure::eq22(&v, ModelOptions::default());
+        let extra = |axis, label: &str, terms| Column {
+            axis,
+            param: 0,
+            label: label.into(),
+            terms,
+        };
+        let x = s.add_parameter(
+            Parameter {
+                name: "x".into(),
+                unit: "-".into(),
+            },
+            vec![
+                extra(Axis::Fx, "u|u|", vec![term(1.0, &[U, AbsU])]),
+                extra(Axis::Fz, "W3^2", vec![term(2.0, &[RotorSpeedSquared(2)])]),
+                extra(
+                    Axis::My,
+                    "d2e_dot",
+                    vec![term(1.0, &[SquaredActuatorRate(2)])],
+                ),
+                extra(
+                    Axis::Mz,
+                    "g*W1_dot",
+                    vec![term(1.0, &[GroundEffect, RotorAcceleration(0)])],
+                ),
+            ],
+        );
+        let sample = Sample {
+            velocity: [-3.0, 1.0, 0.5],
+            omega: vec![100.0, 200.0, 300.0, 400.0],
+            omega_dot: vec![10.0, 20.0, 30.0, 40.0],
+            height: Some(0.1),
+            ..Sample::default()
+        };
+        let mut chunk = SampleChunk::with_capacity(4, 1, true);
+        chunk.push(&sample);
+        let mut ws = Workspace::default();
+        s.assemble(&chunk, &mut ws).unwrap();
+        let value = |label: &str| {
+            let j = (0..s.columns.len())
+                .find(|&j| s.columns[j].param == x && s.columns[j].label == label)
+                .unwrap();
+            ws.column(j)[0]
+        };
+        assert_eq!(value("u|u|"), -9.0);
+        assert_eq!(value("W3^2"), 2.0 * 300.0 * 300.0);
+        // δ̇²e = Σ x_i 2 Ω_i Ω̇_i, x = ℓ/√2 (1, −1, −1, 1).
+        let arm = 0.25 / 2f64.sqrt();
+        let expect = arm * 2.0 * (100.0 * 10.0 - 200.0 * 20.0 - 300.0 * 30.0 + 400.0 * 40.0);
+        assert!((value("d2e_dot") - expect).abs() < 1e-9 * expect.abs());
+        // Rotor plane 0.15 m up, R = 0.1: s = (0.1/0.6)² = 1/36, g = s/(1 − s) = 1/35.
+        assert!((value("g*W1_dot") - 10.0 / 35.0).abs() < 1e-12);
+        // Without a height signal the ground-effect column cannot be built.
+        let mut no_height = chunk.clone();
+        no_height.height.clear();
+        assert_eq!(
+            s.assemble(&no_height, &mut ws),
+            Err(ModelError::MissingHeight)
+        );
     }
 }
