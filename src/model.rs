@@ -101,6 +101,16 @@ pub enum Signal {
     /// rotor-plane height above ground (Cheeseman–Bennett: T_IGE = T (1 + g)); z_r is
     /// held at ≥ R/2 (s ≤ 1/4). Dimensionless; needs the `height` signal.
     GroundEffect,
+    /// Wake immersion of rotor `i` (0-based) in forward flight, dimensionless in [0, 1]:
+    /// the summed overlap (1 − miss/2R, ≥ 0) of the rotor with the wakes of rotors
+    /// upstream of it along the in-plane airflow, capped at 1, times the wake strength
+    /// V_h²/(V_h² + ν0²).
+    WakeImmersion(u8),
+    /// Vortex-ring-state onset of rotor `i` (0-based), dimensionless in [0, 1]:
+    /// exp(−((w_i/ν0 − 1)/0.5)²) exp(−(V_h/ν0)²), w_i = w + p y_i − q x_i the hub's
+    /// descent speed (Eq. 18): a bump centred on descent at the hover inflow speed, the
+    /// classical vortex-ring region, fading with forward speed.
+    VortexRing(u8),
 }
 
 impl Signal {
@@ -136,6 +146,8 @@ impl Signal {
             RotorSpeed(i) => return format!("W{}", i + 1),
             RotorSpeedSquared(i) => return format!("W{}^2", i + 1),
             RotorAcceleration(i) => return format!("W{}_dot", i + 1),
+            WakeImmersion(i) => return format!("wake{}", i + 1),
+            VortexRing(i) => return format!("vrs{}", i + 1),
             SquaredActuatorRate(row) => {
                 return format!("d2{}_dot", ["t", "a", "e", "r"][usize::from(row) % 4]);
             }
@@ -291,9 +303,13 @@ pub struct ModelStructure {
     inflow_weights: [Vec<f64>; 5],
     /// Signals any column or known term uses (kept in step with the columns).
     required: Vec<Signal>,
-    /// Rotor radius R and hub height h, m (for the ground-effect signal).
+    /// Rotor radius R and hub height h, m (ground-effect and wake signals).
     rotor_radius: f64,
     hub_height: f64,
+    /// Hub positions (x_i, y_i), m, and hover inflow ν0, m/s (wake and vortex-ring
+    /// signals).
+    hubs: Vec<[f64; 2]>,
+    nu0: f64,
 }
 
 /// Constants of one vehicle that the Eq. 22 coefficients use.
@@ -401,6 +417,8 @@ impl ModelStructure {
             required: Vec::new(),
             rotor_radius: props.rotor_radius,
             hub_height: props.hub_height,
+            hubs: vehicle.rotors().iter().map(|r| [r.x, r.y]).collect(),
+            nu0: c.nu0,
         };
         structure.required = structure.collect_required_signals();
         structure
@@ -586,6 +604,32 @@ impl ModelStructure {
                 dst.iter_mut()
                     .zip(src)
                     .for_each(|(d, z)| *d = ground_effect_factor(r, z + h));
+            }
+            WakeImmersion(i) => {
+                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
+                for (k, d) in dst.iter_mut().enumerate() {
+                    *d = wake_immersion(
+                        &self.hubs,
+                        usize::from(i),
+                        self.rotor_radius,
+                        self.nu0,
+                        u[k],
+                        v[k],
+                    );
+                }
+            }
+            VortexRing(i) => {
+                let [x, y] = self.hubs[usize::from(i)];
+                let (u, v, w) = (
+                    &chunk.velocity[0][..n],
+                    &chunk.velocity[1][..n],
+                    &chunk.velocity[2][..n],
+                );
+                let (p, q) = (&chunk.rates[0][..n], &chunk.rates[1][..n]);
+                for (k, d) in dst.iter_mut().enumerate() {
+                    let descent = w[k] + p[k] * y - q[k] * x;
+                    *d = vortex_ring_onset(descent, u[k].hypot(v[k]), self.nu0);
+                }
             }
         }
     }
@@ -944,6 +988,43 @@ pub fn ground_effect_factor(rotor_radius: f64, rotor_height: f64) -> f64 {
     s / (1.0 - s)
 }
 
+/// Wake immersion of rotor `i` at in-plane velocity (u, v) (see
+/// [`Signal::WakeImmersion`]).
+fn wake_immersion(hubs: &[[f64; 2]], i: usize, radius: f64, nu0: f64, u: f64, v: f64) -> f64 {
+    let vh2 = u * u + v * v;
+    if vh2 == 0.0 {
+        return 0.0;
+    }
+    let vh = vh2.sqrt();
+    // Unit vector of the airflow relative to the vehicle (downstream).
+    let e = [-u / vh, -v / vh];
+    let hi = hubs[i];
+    let overlap: f64 = hubs
+        .iter()
+        .enumerate()
+        .filter(|&(j, _)| j != i)
+        .map(|(_, hj)| {
+            let d = [hi[0] - hj[0], hi[1] - hj[1]];
+            let along = d[0] * e[0] + d[1] * e[1];
+            let miss = (d[0] * e[1] - d[1] * e[0]).abs();
+            if along > 0.0 {
+                (1.0 - miss / (2.0 * radius)).max(0.0)
+            } else {
+                0.0
+            }
+        })
+        .sum();
+    overlap.min(1.0) * vh2 / (vh2 + nu0 * nu0)
+}
+
+/// Vortex-ring onset at hub descent speed `descent` (m/s, down +) and in-plane airspeed
+/// `vh` (m/s) for hover inflow `nu0` (m/s) (see [`Signal::VortexRing`]).
+fn vortex_ring_onset(descent: f64, vh: f64, nu0: f64) -> f64 {
+    let x = (descent / nu0 - 1.0) / 0.5;
+    let y = vh / nu0;
+    (-x * x).exp() * (-y * y).exp()
+}
+
 /// The values of signal `s` for the `n` samples of `chunk`; computed signals live at
 /// `offset` in `signals`.
 fn signal_slice<'a>(
@@ -1158,6 +1239,40 @@ mod tests {
         assert!((value("d2e_dot") - expect).abs() < 1e-9 * expect.abs());
         // Rotor plane 0.15 m up, R = 0.1: s = (0.1/0.6)² = 1/36, g = s/(1 − s) = 1/35.
         assert!((value("g*W1_dot") - 10.0 / 35.0).abs() < 1e-12);
+        // Wake and vortex-ring onset: rear rotors sit in the front rotors' wakes in
+        // forward flight; descent at ν0 in hover is the centre of the vortex-ring bump.
+        let nu0 = v.hover_induced_velocity();
+        let fwd = Sample {
+            velocity: [10.0, 0.0, nu0],
+            omega: vec![100.0; 4],
+            omega_dot: vec![0.0; 4],
+            height: Some(1.0),
+            ..Sample::default()
+        };
+        let mut c2 = SampleChunk::with_capacity(4, 1, true);
+        c2.push(&fwd);
+        let y = s.add_parameter(
+            Parameter {
+                name: "y".into(),
+                unit: "-".into(),
+            },
+            vec![
+                extra(Axis::Fz, "wake1", vec![term(1.0, &[WakeImmersion(0)])]),
+                extra(Axis::Fz, "wake2", vec![term(1.0, &[WakeImmersion(1)])]),
+                extra(Axis::Fz, "vrs1", vec![term(1.0, &[VortexRing(0)])]),
+            ],
+        );
+        s.assemble(&c2, &mut ws).unwrap();
+        let col = |label: &str| {
+            let j = (0..s.columns.len())
+                .find(|&j| s.columns[j].param == y && s.columns[j].label == label)
+                .unwrap();
+            ws.column(j)[0]
+        };
+        assert_eq!(col("wake1"), 0.0, "front-right rotor is upstream");
+        assert!((col("wake2") - 100.0 / (100.0 + nu0 * nu0)).abs() < 1e-12);
+        let vrs = (-(10.0 / nu0).powi(2)).exp();
+        assert!((col("vrs1") - vrs).abs() < 1e-12);
         // Without a height signal the ground-effect column cannot be built.
         let mut no_height = chunk.clone();
         no_height.height.clear();
