@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 pub mod airframe;
+pub mod diagnose;
 pub mod identified;
 pub mod mixing;
 pub mod model;

@@ -1,0 +1,513 @@
+//! The candidate-effect library: named physical hypotheses that the Eq. 22 model lacks,
+//! each with the extra regressor columns it adds, its parameters and units, and a
+//! sentence of physics.
+//!
+//! Columns that scale a rotor's thrust or torque use the per-rotor thrust T̂_i and
+//! torque Q̂_i of the fitted base model (the Eq. 22 terms of one rotor with the base
+//! estimates θ̂), so a parameter reads directly as a fraction ("rotor 3 thrust −7.9 %")
+//! or a physical quantity (m, m², s).
+
+use crate::model::{Column, ModelStructure, Signal, Term, term};
+use crate::sample::Axis;
+use crate::vehicle::Vehicle;
+
+/// Which physical effect a candidate stands for (look-alikes are compared by kind).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum EffectKind {
+    /// Thrust gain near the ground.
+    GroundEffect,
+    /// One rotor producing more or less thrust and torque than the others.
+    RotorAsymmetry,
+    /// Centre of gravity away from the reference point, in the rotor plane.
+    CgOffset,
+    /// Centre of gravity above or below the assumed height.
+    CgHeight,
+    /// Rear rotors losing thrust in the front rotors' wake.
+    WakeInteraction,
+    /// Airframe drag growing with the square of airspeed.
+    QuadraticDrag,
+    /// Thrust loss in descent near the hover inflow speed.
+    VortexRing,
+    /// The Eq. 22 terms linear in V_h, when the model left them out.
+    LinearVh,
+    /// Loads lagging or leading the logged rotor speeds.
+    RotorSpeedDelay,
+    /// In-plane rotor velocity from the yaw rate (dropped by Assumption 4).
+    YawRateDrag,
+}
+
+/// One parameter of a candidate with the columns it multiplies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CandidateParameter {
+    /// Name, e.g. `thrust_scale_3`.
+    pub name: String,
+    /// Unit of the estimate ("-" for fractions and coefficients).
+    pub unit: String,
+    /// Columns (their `param` field is set when the candidate is added to a model).
+    pub columns: Vec<Column>,
+}
+
+/// A named physical hypothesis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// Effect kind.
+    pub kind: EffectKind,
+    /// Display name, e.g. `weak rotor 3`.
+    pub name: String,
+    /// One sentence of physics.
+    pub physics: &'static str,
+    /// Parameters and their columns.
+    pub parameters: Vec<CandidateParameter>,
+}
+
+impl Candidate {
+    /// Axes the candidate's columns act on, in [`Axis`] order.
+    pub fn axes(&self) -> Vec<Axis> {
+        let mut axes: Vec<Axis> = self
+            .parameters
+            .iter()
+            .flat_map(|p| p.columns.iter().map(|c| c.axis))
+            .collect();
+        axes.sort();
+        axes.dedup();
+        axes
+    }
+}
+
+/// What the library needs to know to build candidates.
+pub struct CandidateContext<'a> {
+    /// The vehicle.
+    pub vehicle: &'a Vehicle,
+    /// The base (Eq. 22) structure.
+    pub structure: &'a ModelStructure,
+    /// Base estimates, one per `structure.params`.
+    pub theta: &'a [f64],
+    /// The data log CG height (ground-effect candidate).
+    pub has_height: bool,
+    /// The data has rotor accelerations (delay candidate).
+    pub has_omega_dot: bool,
+}
+
+impl CandidateContext<'_> {
+    fn theta(&self, name: &str) -> f64 {
+        self.structure
+            .param_index(name)
+            .map_or(0.0, |i| self.theta[i])
+    }
+
+    /// ρπR², kg/m.
+    fn k(&self) -> f64 {
+        let p = &self.vehicle.props;
+        p.air_density * std::f64::consts::PI * p.rotor_radius.powi(2)
+    }
+
+    /// Terms of rotor `i`'s thrust T̂_i (N) from the base estimates, each multiplied by
+    /// `extra` signals and `scale`. With `rate`, the terms of dT̂_i/dΩ_i · Ω̇_i (N/s).
+    fn rotor_thrust(&self, i: usize, extra: &[Signal], scale: f64, rate: bool) -> Vec<Term> {
+        use Signal::*;
+        let r = self.vehicle.props.rotor_radius;
+        let nu0 = self.vehicle.hover_induced_velocity();
+        let rotor = self.vehicle.rotors()[i];
+        let (w, w2, wd) = rotor_signals(i);
+        let k = self.k() * scale;
+        let mut t = if rate {
+            // d/dt of the Ω-dependent terms: 2Ω Ω̇ and Ω̇.
+            vec![
+                term(2.0 * k * self.theta("C_T0") * r * r, &[w, wd]),
+                term(-k * self.theta("C_T_mu0") * r * nu0, &[wd]),
+                term(-k * self.theta("C_T_mu") * r, &[Vh, wd]),
+                term(k * self.theta("C_T_muw") * r, &[W, wd]),
+                term(k * self.theta("C_T_muw") * r * rotor.y, &[P, wd]),
+                term(-k * self.theta("C_T_muw") * r * rotor.x, &[Q, wd]),
+            ]
+        } else {
+            vec![
+                term(k * self.theta("C_T0") * r * r, &[w2]),
+                term(k * self.theta("C_T_mu2"), &[Vh, Vh]),
+                term(-k * self.theta("C_T_mu0") * r * nu0, &[w]),
+                term(-k * self.theta("C_T_mu") * r, &[Vh, w]),
+                term(k * self.theta("C_T_muw") * r, &[W, w]),
+                term(k * self.theta("C_T_muw") * r * rotor.y, &[P, w]),
+                term(-k * self.theta("C_T_muw") * r * rotor.x, &[Q, w]),
+            ]
+        };
+        t.retain(|t| t.coef != 0.0);
+        for x in &mut t {
+            x.factors.extend_from_slice(extra);
+        }
+        t
+    }
+
+    /// Terms of rotor `i`'s aerodynamic torque Q̂_i (N m) from the base estimates, times
+    /// `scale`; with `rate`, of dQ̂_i/dΩ_i · Ω̇_i (N m/s).
+    fn rotor_torque(&self, i: usize, scale: f64, rate: bool) -> Vec<Term> {
+        use Signal::*;
+        let r = self.vehicle.props.rotor_radius;
+        let nu0 = self.vehicle.hover_induced_velocity();
+        let rotor = self.vehicle.rotors()[i];
+        let (w, w2, wd) = rotor_signals(i);
+        let k = self.k() * scale;
+        let muw = self.theta("C_Q_muw") * r * r;
+        let mut t = if rate {
+            vec![
+                term(2.0 * k * self.theta("C_Q0") * r.powi(3), &[w, wd]),
+                term(k * self.theta("C_Q_mu0") * r * r * nu0, &[wd]),
+                term(k * self.theta("C_Q_mu") * r * r, &[Vh, wd]),
+                term(-k * muw, &[W, wd]),
+                term(-k * muw * rotor.y, &[P, wd]),
+                term(k * muw * rotor.x, &[Q, wd]),
+            ]
+        } else {
+            vec![
+                term(k * self.theta("C_Q0") * r.powi(3), &[w2]),
+                term(k * self.theta("C_Q_mu0") * r * r * nu0, &[w]),
+                term(k * self.theta("C_Q_mu") * r * r, &[Vh, w]),
+                term(-k * muw, &[W, w]),
+                term(-k * muw * rotor.y, &[P, w]),
+                term(k * muw * rotor.x, &[Q, w]),
+            ]
+        };
+        t.retain(|t| t.coef != 0.0);
+        t
+    }
+
+    /// Columns of a change of rotor thrusts ΔT_i = θ f_i T̂_i, with f_i the product of
+    /// `factor(i)` signals: F_z −ΣΔT_i, M_x −Σ y_i ΔT_i, M_y Σ x_i ΔT_i (Eq. 13–15).
+    fn thrust_change(
+        &self,
+        label: &str,
+        rotors: &[usize],
+        factor: impl Fn(usize) -> Vec<Signal>,
+        sign: f64,
+    ) -> Vec<Column> {
+        let axes = [(Axis::Fz, -1.0, 0), (Axis::Mx, -1.0, 1), (Axis::My, 1.0, 2)];
+        axes.iter()
+            .map(|&(axis, s, arm)| {
+                let terms = rotors
+                    .iter()
+                    .flat_map(|&i| {
+                        let r = self.vehicle.rotors()[i];
+                        let lever = [1.0, r.y, r.x][arm];
+                        self.rotor_thrust(i, &factor(i), sign * s * lever, false)
+                    })
+                    .filter(|t| t.coef != 0.0)
+                    .collect();
+                column(axis, label, terms)
+            })
+            .filter(|c| !c.terms.is_empty())
+            .collect()
+    }
+
+    /// Model force of axis `axis` from the base estimates, as terms times `scale`.
+    fn model_force(&self, axis: Axis, scale: f64) -> Vec<Term> {
+        self.structure
+            .axis_columns(axis)
+            .flat_map(|j| {
+                let c = &self.structure.columns[j];
+                let th = self.theta[c.param];
+                c.terms.iter().map(move |t| Term {
+                    coef: t.coef * th * scale,
+                    factors: t.factors.clone(),
+                })
+            })
+            .filter(|t| t.coef != 0.0)
+            .collect()
+    }
+}
+
+/// (Ω_i, Ω_i², Ω̇_i) signals of rotor `i`.
+fn rotor_signals(i: usize) -> (Signal, Signal, Signal) {
+    let i = u8::try_from(i).expect("rotor index below 256");
+    (
+        Signal::RotorSpeed(i),
+        Signal::RotorSpeedSquared(i),
+        Signal::RotorAcceleration(i),
+    )
+}
+
+fn column(axis: Axis, label: &str, terms: Vec<Term>) -> Column {
+    Column {
+        axis,
+        param: 0,
+        label: label.to_string(),
+        terms,
+    }
+}
+
+fn parameter(name: &str, unit: &str, columns: Vec<Column>) -> CandidateParameter {
+    CandidateParameter {
+        name: name.to_string(),
+        unit: unit.to_string(),
+        columns,
+    }
+}
+
+/// Every candidate that applies to this vehicle, model and data.
+pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
+    let mut out = Vec::new();
+    let n = ctx.vehicle.rotor_count();
+    let all: Vec<usize> = (0..n).collect();
+    if ctx.has_height {
+        out.push(Candidate {
+            kind: EffectKind::GroundEffect,
+            name: "ground effect".into(),
+            physics: "Near the ground the wake is blocked and thrust rises as 1/(1 - (R/4z)^2) (Cheeseman-Bennett), z the rotor height.",
+            parameters: vec![parameter(
+                "ground_effect_scale",
+                "-",
+                ctx.thrust_change("g_IGE*T_i", &all, |_| vec![Signal::GroundEffect], 1.0),
+            )],
+        });
+    }
+    for i in 0..n {
+        out.push(weak_rotor(ctx, i));
+    }
+    out.push(cg_offset(ctx));
+    out.push(cg_height(ctx));
+    out.push(Candidate {
+        kind: EffectKind::WakeInteraction,
+        name: "rotor-wake interaction".into(),
+        physics: "In forward flight rotors downstream fly in the wakes of rotors upstream and lose thrust, more so as the wake is swept back.",
+        parameters: vec![parameter(
+            "wake_thrust_loss",
+            "-",
+            ctx.thrust_change("-wake_i*T_i", &all, |i| vec![Signal::WakeImmersion(i as u8)], -1.0),
+        )],
+    });
+    out.push(quadratic_drag(ctx));
+    out.push(Candidate {
+        kind: EffectKind::VortexRing,
+        name: "vortex-ring state".into(),
+        physics: "Descending near the hover inflow speed, a rotor re-ingests its own wake and loses thrust unsteadily; forward speed clears it.",
+        parameters: vec![parameter(
+            "vortex_ring_thrust_loss",
+            "-",
+            ctx.thrust_change("-vrs_i*T_i", &all, |i| vec![Signal::VortexRing(i as u8)], -1.0),
+        )],
+    });
+    if !ctx.structure.options.linear_vh_terms {
+        out.push(linear_vh(ctx));
+    }
+    if ctx.has_omega_dot {
+        out.push(delay(ctx));
+    }
+    out.push(yaw_rate_drag(ctx));
+    out
+}
+
+fn weak_rotor(ctx: &CandidateContext, i: usize) -> Candidate {
+    let rotor = ctx.vehicle.rotors()[i];
+    let torque = ctx.rotor_torque(i, -rotor.spin, false);
+    let mut parameters = vec![parameter(
+        &format!("thrust_scale_{}", i + 1),
+        "-",
+        ctx.thrust_change(&format!("T_{}", i + 1), &[i], |_| Vec::new(), 1.0),
+    )];
+    if !torque.is_empty() {
+        parameters.push(parameter(
+            &format!("torque_scale_{}", i + 1),
+            "-",
+            vec![column(Axis::Mz, &format!("-s{0}*Q_{0}", i + 1), torque)],
+        ));
+    }
+    Candidate {
+        kind: EffectKind::RotorAsymmetry,
+        name: format!("weak rotor {}", i + 1),
+        physics: "A damaged propeller or tired motor makes one rotor's thrust and torque a fraction off the others' at the same logged speed.",
+        parameters,
+    }
+}
+
+/// ΔM = F̂ × d for a CG at d from the reference point (moments about the true CG).
+fn cg_offset(ctx: &CandidateContext) -> Candidate {
+    let dx = vec![
+        column(Axis::My, "Fz_model", ctx.model_force(Axis::Fz, 1.0)),
+        column(Axis::Mz, "-Fy_model", ctx.model_force(Axis::Fy, -1.0)),
+    ];
+    let dy = vec![
+        column(Axis::Mx, "-Fz_model", ctx.model_force(Axis::Fz, -1.0)),
+        column(Axis::Mz, "Fx_model", ctx.model_force(Axis::Fx, 1.0)),
+    ];
+    Candidate {
+        kind: EffectKind::CgOffset,
+        name: "CG offset".into(),
+        physics: "With the CG at (dx, dy) from the reference point, the thrust acts on a lever arm: M gains F x d.",
+        parameters: vec![
+            parameter(
+                "cg_dx",
+                "m",
+                dx.into_iter().filter(|c| !c.terms.is_empty()).collect(),
+            ),
+            parameter(
+                "cg_dy",
+                "m",
+                dy.into_iter().filter(|c| !c.terms.is_empty()).collect(),
+            ),
+        ],
+    }
+}
+
+fn cg_height(ctx: &CandidateContext) -> Candidate {
+    let dz = vec![
+        column(Axis::Mx, "Fy_model", ctx.model_force(Axis::Fy, 1.0)),
+        column(Axis::My, "-Fx_model", ctx.model_force(Axis::Fx, -1.0)),
+    ];
+    Candidate {
+        kind: EffectKind::CgHeight,
+        name: "CG height offset".into(),
+        physics: "With the CG dz below the assumed point, in-plane forces act on a longer lever arm in roll and pitch.",
+        parameters: vec![parameter(
+            "cg_dz",
+            "m",
+            dz.into_iter().filter(|c| !c.terms.is_empty()).collect(),
+        )],
+    }
+}
+
+fn quadratic_drag(ctx: &CandidateContext) -> Candidate {
+    use Signal::*;
+    let half_rho = 0.5 * ctx.vehicle.props.air_density;
+    let axis = |axis, s, a, label: &str| {
+        parameter(
+            label,
+            "m^2",
+            vec![column(
+                axis,
+                &format!("-rho/2*{0}|{0}|", s_name(s)),
+                vec![term(-half_rho, &[s, a])],
+            )],
+        )
+    };
+    Candidate {
+        kind: EffectKind::QuadraticDrag,
+        name: "quadratic airframe drag".into(),
+        physics: "The airframe's pressure drag grows with the square of airspeed, -rho/2 CdA v|v| per axis, beyond the linear drag Eq. 22 lumps into the rotors.",
+        parameters: vec![
+            axis(Axis::Fx, U, AbsU, "drag_area_x"),
+            axis(Axis::Fy, V, AbsV, "drag_area_y"),
+            axis(Axis::Fz, W, AbsW, "drag_area_z"),
+        ],
+    }
+}
+
+fn s_name(s: Signal) -> &'static str {
+    match s {
+        Signal::U => "u",
+        Signal::V => "v",
+        _ => "w",
+    }
+}
+
+/// The Eq. 22 terms linear in V_h, taken from the full structure.
+fn linear_vh(ctx: &CandidateContext) -> Candidate {
+    let full = ModelStructure::eq22(
+        ctx.vehicle,
+        crate::model::ModelOptions {
+            linear_vh_terms: true,
+            ..ctx.structure.options
+        },
+    );
+    let parameters = ["C_H_mub_mu", "C_T_mu", "C_Q_mu"]
+        .iter()
+        .filter_map(|name| {
+            let p = full.param_index(name)?;
+            let cols = full
+                .columns
+                .iter()
+                .filter(|c| c.param == p)
+                .cloned()
+                .collect();
+            Some(parameter(name, "-", cols))
+        })
+        .collect();
+    Candidate {
+        kind: EffectKind::LinearVh,
+        name: "terms linear in Vh".into(),
+        physics: "The inflow varies with in-plane airspeed (Eq. 6, C_nu_mu); a constant-inflow model leaves out the terms linear in Vh.",
+        parameters,
+    }
+}
+
+/// Loads follow Ω(t + τ) while the log holds Ω(t): ΔF ≈ τ dF/dΩ Ω̇.
+fn delay(ctx: &CandidateContext) -> Candidate {
+    let n = ctx.vehicle.rotor_count();
+    let rotors = ctx.vehicle.rotors();
+    let thrust = |scale: &dyn Fn(usize) -> f64| -> Vec<Term> {
+        (0..n)
+            .flat_map(|i| ctx.rotor_thrust(i, &[], scale(i), true))
+            .collect()
+    };
+    let torque: Vec<Term> = (0..n)
+        .flat_map(|i| ctx.rotor_torque(i, -rotors[i].spin, true))
+        .collect();
+    // The gyroscopic moments J_z (q δr, −p δr) follow the true speeds too.
+    let jz = match ctx.structure.options.rotor_inertia {
+        crate::model::RotorInertiaTerms::Known => ctx.vehicle.props.rotor_inertia,
+        _ => 0.0,
+    };
+    let mut roll = thrust(&|i| -rotors[i].y);
+    let mut pitch = thrust(&|i| rotors[i].x);
+    if jz != 0.0 {
+        roll.push(term(jz, &[Signal::Q, Signal::DrDot]));
+        pitch.push(term(-jz, &[Signal::P, Signal::DrDot]));
+    }
+    let columns = vec![
+        column(Axis::Fz, "-Sum dT_i/dt", thrust(&|_| -1.0)),
+        column(Axis::Mx, "-Sum y_i dT_i/dt + Jz q dr_dot", roll),
+        column(Axis::My, "Sum x_i dT_i/dt - Jz p dr_dot", pitch),
+        column(Axis::Mz, "-Sum s_i dQ_i/dt", torque),
+    ];
+    Candidate {
+        kind: EffectKind::RotorSpeedDelay,
+        name: "rotor-speed delay".into(),
+        physics: "When logged rotor speeds lag the true ones by tau (filtering, telemetry), the loads lead the log: dF = tau dF/dOmega dOmega/dt.",
+        parameters: vec![parameter(
+            "rotor_speed_delay",
+            "s",
+            columns
+                .into_iter()
+                .filter(|c| !c.terms.is_empty())
+                .collect(),
+        )],
+    }
+}
+
+/// Hub in-plane velocity from the yaw rate, r × r_i (Assumption 4 drops it): rotor
+/// drag gains −r y_i, r x_i components (Eq. 17).
+fn yaw_rate_drag(ctx: &CandidateContext) -> Candidate {
+    use Signal::*;
+    let k = ctx.k();
+    let r = ctx.vehicle.props.rotor_radius;
+    let n = ctx.vehicle.rotor_count() as f64;
+    let l2 = ctx.vehicle.arm_length().powi(2);
+    let nu0 = ctx.vehicle.hover_induced_velocity();
+    Candidate {
+        kind: EffectKind::YawRateDrag,
+        name: "yaw-rate rotor drag".into(),
+        physics: "Yawing moves each hub sideways (r x r_i); the rotors' H-force on that velocity damps yaw and couples yaw rate into Fx and Fy.",
+        parameters: vec![
+            parameter(
+                "C_H_mub_r",
+                "-",
+                vec![
+                    column(Axis::Fx, "-r*da", vec![term(-k * r, &[R, Da])]),
+                    column(Axis::Fy, "-r*de", vec![term(-k * r, &[R, De])]),
+                    column(
+                        Axis::Mz,
+                        "-l^2*N*r*dt",
+                        vec![term(-k * r * l2 * n, &[R, Dt])],
+                    ),
+                ],
+            ),
+            parameter(
+                "C_H_mub_mu0_r",
+                "-",
+                vec![column(
+                    Axis::Mz,
+                    "-nu0*l^2*N*r",
+                    vec![term(-k * nu0 * l2 * n, &[R])],
+                )],
+            ),
+        ],
+    }
+}

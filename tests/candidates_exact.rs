@@ -1,0 +1,215 @@
+//! Each candidate effect's columns reproduce its effect exactly in the closed-form world
+//! (per-rotor Eq. 5 loads summed over the airframe), so a recovered parameter means what
+//! its name says. Tolerance 1e-9 relative to the effect's own size: both sides are a few
+//! dozen products; a wrong sign, lever arm or rotor shows at ≥ 1e-2.
+
+use mrsysid::airframe::{closed_form_wrench, cross};
+use mrsysid::diagnose::{CandidateContext, EffectKind, library};
+use mrsysid::model::{ModelOptions, ModelStructure};
+use mrsysid::rotor::BladeConstants;
+use mrsysid::sample::Sample;
+use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+
+fn vehicle(preset: Preset) -> Vehicle {
+    let props = MassAndRotorProperties {
+        mass: 1.2,
+        inertia: [[0.011, 0.0, 0.0], [0.0, 0.012, 0.0], [0.0, 0.0, 0.021]],
+        air_density: 1.225,
+        rotor_radius: 0.0635,
+        hub_height: 0.02,
+        rotor_inertia: 3e-5,
+    };
+    Vehicle::preset("q", preset, 0.225, 1.0, props).unwrap()
+}
+
+const BLADE: BladeConstants = BladeConstants {
+    blades: 2.0,
+    chord: 0.012,
+    lift_slope: 5.7,
+    mean_drag: 0.012,
+    theta0: 0.35,
+    theta_tw: -0.12,
+    c_nu_mu: -0.1,
+    c_nu_w: 0.3,
+};
+
+fn samples(n_rotors: usize, n: usize) -> Vec<Sample> {
+    let mut rng = StdRng::seed_from_u64(3);
+    (0..n)
+        .map(|_| Sample {
+            velocity: [
+                rng.random_range(-15.0..15.0),
+                rng.random_range(-15.0..15.0),
+                rng.random_range(-3.0..12.0),
+            ],
+            rates: [
+                rng.random_range(-8.0..8.0),
+                rng.random_range(-8.0..8.0),
+                rng.random_range(-4.0..4.0),
+            ],
+            omega: (0..n_rotors)
+                .map(|_| rng.random_range(1500.0..2500.0))
+                .collect(),
+            omega_dot: (0..n_rotors)
+                .map(|_| rng.random_range(-3000.0..3000.0))
+                .collect(),
+            height: Some(rng.random_range(0.0..0.5)),
+            ..Sample::default()
+        })
+        .collect()
+}
+
+/// Thrust of each rotor (N) from the closed form at its Eq. 18 hub velocity.
+fn rotor_thrusts(v: &Vehicle, s: &Sample) -> Vec<f64> {
+    let nu0 = v.hover_induced_velocity();
+    v.rotors()
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let hub = [
+                s.velocity[0],
+                s.velocity[1],
+                s.velocity[2] + s.rates[0] * r.y - s.rates[1] * r.x,
+            ];
+            BLADE
+                .loads(
+                    v.props.air_density,
+                    v.props.rotor_radius,
+                    s.omega[i],
+                    hub,
+                    nu0,
+                )
+                .thrust
+        })
+        .collect()
+}
+
+/// Truth wrench with each rotor's thrust changed by `dt[i]` (N).
+fn with_thrust_change(v: &Vehicle, base: [f64; 6], dt: &[f64]) -> [f64; 6] {
+    let mut w = base;
+    for (r, d) in v.rotors().iter().zip(dt) {
+        w[2] -= d;
+        w[3] -= r.y * d;
+        w[4] += r.x * d;
+    }
+    w
+}
+
+/// Largest |model − truth| relative to the largest |truth − base| over the samples, for
+/// the structure extended by candidate `kind` with parameters `values`.
+fn check(
+    v: &Vehicle,
+    kind: EffectKind,
+    values: &[f64],
+    truth: impl Fn(&Sample, [f64; 6]) -> [f64; 6],
+) -> f64 {
+    let base = ModelStructure::eq22(v, ModelOptions::default());
+    let lumped = BLADE.lumped_parameters(v.props.rotor_radius);
+    let theta: Vec<f64> = base
+        .params
+        .iter()
+        .map(|p| lumped.value(&p.name).unwrap())
+        .collect();
+    let ctx = CandidateContext {
+        vehicle: v,
+        structure: &base,
+        theta: &theta,
+        has_height: true,
+        has_omega_dot: true,
+    };
+    let cand = library(&ctx)
+        .into_iter()
+        .find(|c| c.kind == kind)
+        .expect("candidate present");
+    let mut extended = base.clone();
+    let idx = cand.add_to(&mut extended);
+    let mut full = theta.clone();
+    full.resize(extended.params.len(), 0.0);
+    for (&i, &x) in idx.iter().zip(values) {
+        full[i] = x;
+    }
+    let (mut err, mut size) = (0.0_f64, 0.0_f64);
+    for s in samples(v.rotor_count(), 300) {
+        let b = closed_form_wrench(v, &BLADE, s.velocity, s.rates, &s.omega, &s.omega_dot);
+        let t = truth(&s, b);
+        let y = extended.predict(&full, &s).unwrap();
+        for a in 0..6 {
+            err = err.max((y[a] - t[a]).abs());
+            size = size.max((t[a] - b[a]).abs());
+        }
+    }
+    assert!(size > 0.0, "{kind:?}: the effect changes nothing");
+    err / size
+}
+
+#[test]
+fn weak_rotor_thrust_columns_are_exact() {
+    for preset in [Preset::QuadX, Preset::HexaPlus] {
+        let v = vehicle(preset);
+        // Rotor 1's candidate: thrust −8 %, torque unchanged.
+        let e = check(&v, EffectKind::RotorAsymmetry, &[-0.08, 0.0], |s, b| {
+            let t = rotor_thrusts(&v, s);
+            let mut d = vec![0.0; t.len()];
+            d[0] = -0.08 * t[0];
+            with_thrust_change(&v, b, &d)
+        });
+        assert!(e < 1e-9, "{preset:?}: {e:e}");
+    }
+}
+
+#[test]
+fn ground_effect_columns_are_exact() {
+    let v = vehicle(Preset::QuadX);
+    let (r, h) = (v.props.rotor_radius, v.props.hub_height);
+    let e = check(&v, EffectKind::GroundEffect, &[1.0], |s, b| {
+        let g = mrsysid::model::ground_effect_factor(r, s.height.unwrap() + h);
+        let d: Vec<f64> = rotor_thrusts(&v, s).iter().map(|t| g * t).collect();
+        with_thrust_change(&v, b, &d)
+    });
+    assert!(e < 1e-9, "{e:e}");
+}
+
+#[test]
+fn cg_offset_columns_are_exact() {
+    let v = vehicle(Preset::QuadX);
+    let d = [0.004, -0.008, 0.0];
+    let e = check(&v, EffectKind::CgOffset, &[d[0], d[1]], |_, b| {
+        let m = cross([b[0], b[1], b[2]], d);
+        [b[0], b[1], b[2], b[3] + m[0], b[4] + m[1], b[5] + m[2]]
+    });
+    assert!(e < 1e-9, "{e:e}");
+}
+
+#[test]
+fn quadratic_drag_columns_are_exact() {
+    let v = vehicle(Preset::QuadPlus);
+    let cda = [0.01, 0.02, 0.03];
+    let e = check(&v, EffectKind::QuadraticDrag, &cda, |s, b| {
+        let mut w = b;
+        for k in 0..3 {
+            w[k] -= 0.5 * 1.225 * cda[k] * s.velocity[k] * s.velocity[k].abs();
+        }
+        w
+    });
+    assert!(e < 1e-9, "{e:e}");
+}
+
+#[test]
+fn delay_columns_are_first_order_exact() {
+    // Loads follow Ω(t + τ) = Ω + τ Ω̇ + O(τ²): the candidate is the first-order term, so
+    // its error relative to the effect is O(τ Ω̈/Ω̇), here ~τΩ̇/Ω ≈ 1e-3.
+    let v = vehicle(Preset::QuadX);
+    let tau = 0.001;
+    let e = check(&v, EffectKind::RotorSpeedDelay, &[tau], |s, _| {
+        let late: Vec<f64> = s
+            .omega
+            .iter()
+            .zip(&s.omega_dot)
+            .map(|(w, wd)| w + tau * wd)
+            .collect();
+        closed_form_wrench(&v, &BLADE, s.velocity, s.rates, &late, &s.omega_dot)
+    });
+    assert!(e < 5e-3, "{e:e}");
+}
