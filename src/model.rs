@@ -489,6 +489,26 @@ impl ModelStructure {
         idx
     }
 
+    /// The structure restricted to parameters `keep` (indices, in the order given) and
+    /// their columns; also returns, for each kept column, its index in `self.columns`.
+    pub fn subset(&self, keep: &[usize]) -> (ModelStructure, Vec<usize>) {
+        let cols: Vec<usize> = (0..self.columns.len())
+            .filter(|&j| keep.contains(&self.columns[j].param))
+            .collect();
+        let mut s = self.clone();
+        s.columns = cols
+            .iter()
+            .map(|&j| {
+                let mut c = self.columns[j].clone();
+                c.param = keep.iter().position(|&p| p == c.param).expect("kept parameter");
+                c
+            })
+            .collect();
+        s.params = keep.iter().map(|&p| self.params[p].clone()).collect();
+        s.required = s.collect_required_signals();
+        (s, cols)
+    }
+
     /// Checks that `chunk` can be assembled with this structure.
     pub fn check_chunk(&self, chunk: &SampleChunk) -> Result<(), ModelError> {
         if chunk.rotor_count() != self.rotor_count {
