@@ -8,18 +8,23 @@
 //! - [`airframe`]: per-rotor loads carried to the airframe and summed (§4.1, Eq. 10–18);
 //! - [`mixing`]: virtual actuators (Eq. 19–21);
 //! - [`model`]: the Eq. 22 regressors as data, batch assembly;
-//! - [`sample`]: the data contract, as structure-of-arrays chunks.
+//! - [`sample`]: the data contract, as structure-of-arrays chunks;
+//! - [`stats`]: one-pass mergeable statistics of the regressors and outputs;
+//! - [`estimate`]: the two-step estimation of §5 (OLS, FSOA, MMR, inference,
+//!   diagnostics, identifiability).
 
 #![warn(missing_docs)]
 
 pub mod airframe;
 pub mod diagnose;
+pub mod estimate;
 pub mod identified;
 pub mod mixing;
 pub mod model;
 pub mod report;
 pub mod rotor;
 pub mod sample;
+pub mod stats;
 pub mod vehicle;
 
 /// Number of samples per chunk in streaming passes: one place that decides it.

@@ -1,0 +1,125 @@
+//! Inference on the MMR estimates (seed Table 5) and goodness of fit (Table 4).
+//!
+//! t₀ = θ̂/σ(θ̂); H₀: θ = 0 is tested two-sided against Student's t with N − n_θ degrees
+//! of freedom (seed §5.2), N the sample count and n_θ the number of estimated parameters;
+//! P = 2·S(|t₀|) with the survival function S, so tiny P-values keep full relative
+//! precision instead of underflowing as 1 − CDF would.
+
+use serde::Serialize;
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+use super::EstimateError;
+use crate::model::ModelStructure;
+use crate::sample::Axis;
+use crate::stats::Accumulator;
+
+/// One estimated parameter with its statistics (a row of seed Table 5).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParameterEstimate {
+    /// Parameter name.
+    pub name: String,
+    /// Unit of the estimate.
+    pub unit: String,
+    /// θ̂.
+    pub estimate: f64,
+    /// σ(θ̂) from (Hᵀ(R⁻¹⊗I)H)⁻¹ (white residuals).
+    pub std_error: f64,
+    /// t₀ = θ̂/σ.
+    pub t: f64,
+    /// Two-sided P-value of H₀: θ = 0.
+    pub p_value: f64,
+    /// Half-width of the 95 % confidence interval, t(0.975, dof)·σ.
+    pub ci95_half_width: f64,
+}
+
+/// Two-sided P-value and 97.5 % quantile of Student's t with `dof` degrees of freedom.
+pub(crate) fn t_test(t: f64, dof: f64) -> (f64, f64) {
+    match StudentsT::new(0.0, 1.0, dof) {
+        Ok(d) => (2.0 * d.sf(t.abs()), d.inverse_cdf(0.975)),
+        Err(_) => (f64::NAN, f64::NAN),
+    }
+}
+
+/// Goodness of fit of one axis (a row of seed Table 4).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct AxisMetrics {
+    /// Output axis.
+    pub axis: Axis,
+    /// Centred R² = 1 − SSE/Σ(z − z̄)² (may be negative).
+    pub r2: f64,
+    /// Root-mean-square error √(SSE/N), N or N m.
+    pub rmse: f64,
+    /// RMSE/(max z − min z).
+    pub nrmse: f64,
+    /// Theil's inequality coefficient RMSE/(rms(ŷ) + rms(z)).
+    pub tic: f64,
+}
+
+/// Goodness of fit over all axes: the mean of the six per-axis values (the axes have
+/// different units, so no pooled sum is meaningful).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct OverallMetrics {
+    /// Mean centred R².
+    pub r2: f64,
+    /// Mean NRMSE.
+    pub nrmse: f64,
+    /// Mean TIC.
+    pub tic: f64,
+}
+
+impl OverallMetrics {
+    /// Means of `axes`.
+    pub fn of(axes: &[AxisMetrics; 6]) -> Self {
+        let mean = |f: fn(&AxisMetrics) -> f64| axes.iter().map(f).sum::<f64>() / 6.0;
+        Self {
+            r2: mean(|a| a.r2),
+            nrmse: mean(|a| a.nrmse),
+            tic: mean(|a| a.tic),
+        }
+    }
+}
+
+/// R², NRMSE and TIC per axis of the model `structure` with parameters `theta` (one per
+/// `structure.params`) on the data summarised by `acc` (e.g. validation data): no pass
+/// over the samples is needed.
+pub fn evaluate(
+    structure: &ModelStructure,
+    theta: &[f64],
+    acc: &Accumulator,
+) -> Result<[AxisMetrics; 6], EstimateError> {
+    if theta.len() != structure.params.len() || acc.n_columns() != structure.columns.len() {
+        return Err(EstimateError::ShapeMismatch {
+            parameters: structure.params.len(),
+            theta: theta.len(),
+            columns: structure.columns.len(),
+            accumulated: acc.n_columns(),
+        });
+    }
+    if acc.count() == 0 {
+        return Err(EstimateError::TooFewSamples {
+            samples: 0,
+            parameters: theta.len(),
+        });
+    }
+    let n = acc.count() as f64;
+    Ok(Axis::ALL.map(|axis| {
+        let mut fit = vec![0.0; acc.m()];
+        for c in structure.axis_columns(axis) {
+            fit[c] = theta[structure.columns[c].param];
+        }
+        let zc = acc.output_index(axis);
+        let mut resid: Vec<f64> = fit.iter().map(|v| -v).collect();
+        resid[zc] = 1.0;
+        let sse = acc.combination_norm2(&resid);
+        let yy = acc.combination_norm2(&fit);
+        let zz = acc.cross(zc, zc);
+        let rmse = (sse / n).sqrt();
+        AxisMetrics {
+            axis,
+            r2: 1.0 - sse / acc.output_centred_ss(axis),
+            rmse,
+            nrmse: rmse / (acc.max(zc) - acc.min(zc)),
+            tic: rmse / ((yy / n).sqrt() + (zz / n).sqrt()),
+        }
+    }))
+}

@@ -1,0 +1,102 @@
+//! Per-axis ordinary least squares (seed Eq. 23): z_i = X_i θ_i + v_i, each axis on its
+//! own columns, every column a separate regressor (a parameter shared between axes is
+//! estimated once per axis here; the MMR joins them).
+
+use faer::Mat;
+use serde::Serialize;
+
+use super::identifiability::{ProblemConditioning, solve_identifiable};
+use super::{EstimateError, FitOptions};
+use crate::model::ModelStructure;
+use crate::sample::Axis;
+use crate::stats::Accumulator;
+
+/// The OLS fit of one axis with all its identifiable columns.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AxisOls {
+    /// Output axis.
+    pub axis: Axis,
+    /// Indices into `ModelStructure::columns` of the columns kept in the fit.
+    pub columns: Vec<usize>,
+    /// `param (label)` of each kept column.
+    pub terms: Vec<String>,
+    /// Estimates, one per kept column (units of the parameter).
+    pub theta: Vec<f64>,
+    /// Standard errors √(σ̂² (XᵀX)⁻¹_jj), white-residual assumption.
+    pub std_error: Vec<f64>,
+    /// Residual sum of squares, (N or N m)².
+    pub sse: f64,
+    /// Residual variance σ̂² = SSE / (N − p_i), (N or N m)². The seed divides by N − 1;
+    /// N − p_i is unbiased and the two agree for N ≫ p_i.
+    pub residual_variance: f64,
+    /// Residual degrees of freedom N − p_i.
+    pub dof: f64,
+    /// Centred R² = 1 − SSE/Σ(z − z̄)² (no intercept in the model; may be negative).
+    pub r2: f64,
+}
+
+impl AxisOls {
+    /// Weights w over the augmented columns [X | Z] with A w = residual z − X θ̂.
+    pub fn residual_weights(&self, acc: &Accumulator) -> Vec<f64> {
+        let mut w = vec![0.0; acc.m()];
+        for (&c, &t) in self.columns.iter().zip(&self.theta) {
+            w[c] = -t;
+        }
+        w[acc.output_index(self.axis)] = 1.0;
+        w
+    }
+}
+
+/// Term name used in reports: `param (label)`.
+pub(crate) fn term_name(structure: &ModelStructure, column: usize) -> String {
+    let c = &structure.columns[column];
+    format!("{} ({})", structure.params[c.param].name, c.label)
+}
+
+/// The compressed design R[:, cols] (m × k) and target R[:, z_axis] of a column subset.
+pub(crate) fn compressed(acc: &Accumulator, cols: &[usize], axis: Axis) -> (Mat<f64>, Vec<f64>) {
+    let m = acc.m();
+    let x = Mat::from_fn(m, cols.len(), |i, j| acc.r(i, cols[j]));
+    let z = acc.r_column(acc.output_index(axis)).to_vec();
+    (x, z)
+}
+
+/// OLS of `axis` on all of its columns in `structure`, from the accumulated statistics.
+pub fn axis_ols(
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    axis: Axis,
+    options: &FitOptions,
+) -> Result<(AxisOls, ProblemConditioning), EstimateError> {
+    let cols: Vec<usize> = structure.axis_columns(axis).collect();
+    let names: Vec<String> = cols.iter().map(|&c| term_name(structure, c)).collect();
+    let n = acc.count() as f64;
+    if n <= cols.len() as f64 {
+        return Err(EstimateError::TooFewSamples {
+            samples: acc.count(),
+            parameters: cols.len(),
+        });
+    }
+    let (x, z) = compressed(acc, &cols, axis);
+    let (ls, kept, report) = solve_identifiable(&format!("OLS {axis}"), &x, &z, &names, options)?;
+    let k = kept.len();
+    let dof = n - k as f64;
+    let residual_variance = ls.sse / dof;
+    let sst = acc.output_centred_ss(axis);
+    Ok((
+        AxisOls {
+            axis,
+            columns: kept.iter().map(|&j| cols[j]).collect(),
+            terms: kept.iter().map(|&j| names[j].clone()).collect(),
+            std_error: (0..k)
+                .map(|j| (residual_variance * ls.xtx_inv[j * k + j]).sqrt())
+                .collect(),
+            theta: ls.theta,
+            sse: ls.sse,
+            residual_variance,
+            dof,
+            r2: 1.0 - ls.sse / sst,
+        },
+        report,
+    ))
+}
