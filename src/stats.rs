@@ -336,3 +336,33 @@ fn triangular_factor(s: &mut Stacked, rows: usize, m: usize) -> Vec<f64> {
     }
     r
 }
+
+impl Accumulator {
+    /// The statistics of the structure's columns `columns` only (indices into this
+    /// accumulator's columns, in the order wanted), as if that smaller structure had
+    /// been accumulated: R of A\[:, S\] is the triangular factor of R\[:, S\], since
+    /// A\[:, S\] = Q R\[:, S\]. Outputs, count and moments carry over unchanged.
+    pub fn select(&self, columns: &[usize]) -> Accumulator {
+        let m = self.m();
+        let keep: Vec<usize> = columns.iter().copied().chain(self.p..m).collect();
+        let k = keep.len();
+        let r = STACKED.with_borrow_mut(|s| {
+            s.a.resize_with(m, k, |_, _| 0.0);
+            for (dst, &j) in keep.iter().enumerate() {
+                s.a.col_as_slice_mut(dst)
+                    .copy_from_slice(&self.r[j * m..(j + 1) * m]);
+            }
+            triangular_factor(s, m, k)
+        });
+        Accumulator {
+            p: columns.len(),
+            r,
+            count: self.count,
+            min: keep.iter().map(|&j| self.min[j]).collect(),
+            max: keep.iter().map(|&j| self.max[j]).collect(),
+            out_mean: self.out_mean,
+            out_m2: self.out_m2,
+            labels: keep.iter().map(|&j| self.labels[j].clone()).collect(),
+        }
+    }
+}

@@ -448,3 +448,52 @@ fn unidentifiable_parameters_are_refused_or_dropped() {
     let got: Vec<f64> = f.mmr.parameters.iter().map(|e| e.estimate).collect();
     assert!(max_rel(&got, &kept) < 1e-9);
 }
+
+#[test]
+fn selected_columns_equal_accumulating_the_smaller_structure() {
+    // Accumulate a structure with an extra parameter, select the base columns, and
+    // compare every cross product with accumulating the base structure directly: both
+    // are QR factors of the same data, equal up to rounding (1e-12 relative).
+    use mrsysid::model::{Column, Parameter, Signal, term};
+    let (base, _, samples) = noisy(5, 3000);
+    let chunks = chunks(&samples, 4, 1024);
+    let mut big = base.clone();
+    big.add_parameter(
+        Parameter {
+            name: "extra".into(),
+            unit: "-".into(),
+        },
+        vec![Column {
+            axis: mrsysid::sample::Axis::Fx,
+            param: 0,
+            label: "u|u|".into(),
+            terms: vec![term(1.0, &[Signal::U, Signal::AbsU])],
+        }],
+    );
+    let (a_base, a_big) = (accumulate(&base, &chunks), accumulate(&big, &chunks));
+    // Base columns of `big` in base order: same (axis, param name, label).
+    let map: Vec<usize> = base
+        .columns
+        .iter()
+        .map(|c| {
+            big.columns
+                .iter()
+                .position(|b| {
+                    b.axis == c.axis
+                        && b.label == c.label
+                        && big.params[b.param].name == base.params[c.param].name
+                })
+                .unwrap()
+        })
+        .collect();
+    let sel = a_big.select(&map);
+    assert_eq!(sel.count(), a_base.count());
+    let m = a_base.m();
+    for i in 0..m {
+        for j in 0..m {
+            let (x, y) = (sel.cross(i, j), a_base.cross(i, j));
+            let scale = (a_base.cross(i, i) * a_base.cross(j, j)).sqrt();
+            assert!((x - y).abs() <= 1e-12 * scale, "({i},{j}): {x} vs {y}");
+        }
+    }
+}

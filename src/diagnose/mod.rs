@@ -3,8 +3,13 @@
 //! data not used to fit.
 
 pub mod candidates;
+pub mod procedure;
 
 pub use candidates::{Candidate, CandidateContext, CandidateParameter, EffectKind, library};
+pub use procedure::{
+    CandidateScore, CandidateStatistics, DiagnoseError, DiagnoseOptions, Diagnosis, DiagnosisStep,
+    EffectParameter, diagnose,
+};
 
 use crate::model::{ModelStructure, Parameter};
 

@@ -1,0 +1,383 @@
+//! The closing-the-loop procedure: score every candidate effect on the residual of the
+//! current model, add the best one that is significant, plausible and pays on
+//! validation data, refit, repeat.
+//!
+//! All candidates' columns are accumulated once, next to the base columns, for the fit
+//! and the validation data; every trial model is then a column subset of those
+//! statistics ([`Accumulator::select`]), so no trial re-reads the data.
+//!
+//! A candidate is accepted when
+//! 1. its MMR estimates are significant: the smallest P-value of its parameters is below
+//!    α / (number of candidates scored in the step) (Bonferroni);
+//! 2. it is plausible: every estimate lies in the physical range of its parameter;
+//! 3. it pays on validation data: on some axis it acts on, validation NRMSE falls by at
+//!    least [`DiagnoseOptions::min_gain`] (relative), and no axis gets worse by more
+//!    than [`DiagnoseOptions::max_loss`].
+//!
+//! Among accepted candidates the largest total validation gain wins. Candidates of other
+//! kinds whose gain is within [`DiagnoseOptions::look_alike`] of the winner's are
+//! reported as look-alikes the data cannot tell apart.
+
+use serde::Serialize;
+
+use super::candidates::{Candidate, EffectKind};
+use crate::estimate::{self, AxisMetrics, FitOptions};
+use crate::model::ModelStructure;
+use crate::sample::Axis;
+use crate::stats::Accumulator;
+
+/// Thresholds of the procedure.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DiagnoseOptions {
+    /// Family-wise significance level per step.
+    pub alpha: f64,
+    /// Smallest relative validation-NRMSE reduction on an affected axis that counts.
+    pub min_gain: f64,
+    /// Largest relative validation-NRMSE increase tolerated on any axis.
+    pub max_loss: f64,
+    /// Relative gain difference below which two kinds are look-alikes.
+    pub look_alike: f64,
+    /// Most effects added.
+    pub max_effects: usize,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        Self {
+            alpha: 0.01,
+            min_gain: 0.05,
+            max_loss: 0.01,
+            look_alike: 0.1,
+            max_effects: 4,
+        }
+    }
+}
+
+/// One estimated candidate parameter.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EffectParameter {
+    /// Parameter name.
+    pub name: String,
+    /// Estimate.
+    pub estimate: f64,
+    /// Standard deviation.
+    pub std: f64,
+    /// Unit.
+    pub unit: String,
+    /// Two-sided P-value.
+    pub p: f64,
+}
+
+/// A candidate as scored in one step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CandidateScore {
+    /// Candidate name.
+    pub name: String,
+    /// Effect kind.
+    pub kind: EffectKind,
+    /// Axes it acts on.
+    pub axes: Vec<Axis>,
+    /// Estimates with the candidate added.
+    pub parameters: Vec<EffectParameter>,
+    /// Relative validation-NRMSE reduction per axis (positive = better), Fx…Mz.
+    pub validation_gain: [f64; 6],
+    /// Sum of the positive gains on the axes it acts on.
+    pub total_gain: f64,
+    /// Smallest P-value of its parameters.
+    pub min_p: f64,
+    /// Why it was not accepted (empty when it was acceptable).
+    pub rejected: String,
+}
+
+/// One step of the procedure.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DiagnosisStep {
+    /// Candidates, best first.
+    pub ranking: Vec<CandidateScore>,
+    /// The effect added in this step (index into `ranking`), if any.
+    pub added: Option<usize>,
+    /// Other kinds the data cannot tell apart from the added one.
+    pub look_alikes: Vec<String>,
+}
+
+/// Result of the procedure.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnosis {
+    /// Steps in order; the last one adds nothing (or the effect limit was reached).
+    pub steps: Vec<DiagnosisStep>,
+    /// Effects added, in order.
+    pub effects_added: Vec<CandidateScore>,
+    /// Validation metrics of the base model.
+    pub before: [AxisMetrics; 6],
+    /// Validation metrics of the final model.
+    pub after: [AxisMetrics; 6],
+    /// θ̂ of the final model over `structure.params`.
+    pub theta: Vec<f64>,
+    /// Standard deviations of `theta` (0 for parameters dropped as unidentifiable).
+    pub std: Vec<f64>,
+    /// Structure of the final model.
+    #[serde(skip)]
+    pub structure: ModelStructure,
+}
+
+/// Why the procedure could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DiagnoseError {
+    /// The base model itself could not be fitted from the statistics.
+    #[error("diagnosis: {0}")]
+    Fit(String),
+}
+
+/// Statistics of the base structure extended by every candidate.
+pub struct CandidateStatistics<'a> {
+    /// Base structure followed by every candidate (in `candidates` order).
+    pub extended: &'a ModelStructure,
+    /// The candidates, in the order they were added to `extended`.
+    pub candidates: &'a [Candidate],
+    /// Parameter indices in `extended` of each candidate.
+    pub candidate_params: &'a [Vec<usize>],
+    /// Number of base parameters (the first ones of `extended`).
+    pub base_params: usize,
+    /// Fit-data statistics over `extended`.
+    pub fit: &'a Accumulator,
+    /// Validation-data statistics over `extended`.
+    pub validation: &'a Accumulator,
+}
+
+/// Physical range of a candidate parameter (by name prefix).
+fn plausible(name: &str, value: f64) -> bool {
+    let range = |lo: f64, hi: f64| (lo..=hi).contains(&value);
+    match name {
+        n if n.starts_with("thrust_scale_") || n.starts_with("torque_scale_") => range(-0.6, 0.6),
+        "cg_dx" | "cg_dy" | "cg_dz" => range(-0.2, 0.2),
+        "ground_effect_scale" => range(0.0, 3.0),
+        "wake_thrust_loss" | "vortex_ring_thrust_loss" => range(0.0, 1.0),
+        n if n.starts_with("drag_area_") => range(0.0, 2.0),
+        "rotor_speed_delay" => range(-0.05, 0.2),
+        _ => value.is_finite(),
+    }
+}
+
+/// Sub-model of `stats.extended` with the base parameters plus `params`: the structure
+/// and the column indices into `extended`.
+fn submodel(stats: &CandidateStatistics, params: &[usize]) -> (ModelStructure, Vec<usize>) {
+    let mut keep: Vec<usize> = (0..stats.base_params).collect();
+    keep.extend_from_slice(params);
+    stats.extended.subset(&keep)
+}
+
+/// Fit of a sub-model: (θ over its params, std, P-values, validation metrics).
+struct Trial {
+    theta: Vec<f64>,
+    std: Vec<f64>,
+    p: Vec<f64>,
+    validation: [AxisMetrics; 6],
+    structure: ModelStructure,
+}
+
+fn trial(
+    stats: &CandidateStatistics,
+    params: &[usize],
+    options: &FitOptions,
+) -> Result<Trial, String> {
+    let (structure, cols) = submodel(stats, params);
+    let fit_acc = stats.fit.select(&cols);
+    let val_acc = stats.validation.select(&cols);
+    let fit = estimate::fit(&structure, &fit_acc, options).map_err(|e| e.to_string())?;
+    let validation =
+        estimate::evaluate(&structure, &fit.mmr.theta, &val_acc).map_err(|e| e.to_string())?;
+    let mut std = vec![0.0; structure.params.len()];
+    let mut p = vec![1.0; structure.params.len()];
+    for (est, &i) in fit.mmr.parameters.iter().zip(&fit.mmr.param_index) {
+        std[i] = est.std_error;
+        p[i] = est.p_value;
+    }
+    Ok(Trial {
+        theta: fit.mmr.theta.clone(),
+        std,
+        p,
+        validation,
+        structure,
+    })
+}
+
+fn gains(before: &[AxisMetrics; 6], after: &[AxisMetrics; 6]) -> [f64; 6] {
+    std::array::from_fn(|a| {
+        let b = before[a].nrmse;
+        if b > 0.0 {
+            (b - after[a].nrmse) / b
+        } else {
+            0.0
+        }
+    })
+}
+
+/// Runs the procedure on accumulated candidate statistics.
+pub fn diagnose(
+    stats: &CandidateStatistics,
+    fit_options: &FitOptions,
+    options: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let mut added: Vec<usize> = Vec::new();
+    let mut current = trial(stats, &[], fit_options).map_err(DiagnoseError::Fit)?;
+    let before = current.validation;
+    let mut steps = Vec::new();
+    let mut effects_added = Vec::new();
+    while added.len() < options.max_effects {
+        let remaining: Vec<usize> = (0..stats.candidates.len())
+            .filter(|c| !added.contains(c))
+            .collect();
+        let level = options.alpha / remaining.len().max(1) as f64;
+        let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> = remaining
+            .iter()
+            .map(|&c| score(stats, &added, c, &current, fit_options, options, level))
+            .collect();
+        scored.sort_by(|a, b| {
+            (a.0.rejected.is_empty(), a.0.total_gain)
+                .partial_cmp(&(b.0.rejected.is_empty(), b.0.total_gain))
+                .unwrap_or(std::cmp::Ordering::Equal)
+                .reverse()
+        });
+        let best_ok = scored
+            .first()
+            .filter(|s| s.0.rejected.is_empty())
+            .map(|s| s.0.clone());
+        let look_alikes = best_ok
+            .as_ref()
+            .map(|best| {
+                scored[1..]
+                    .iter()
+                    .filter(|s| {
+                        s.0.rejected.is_empty()
+                            && s.0.kind != best.kind
+                            && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
+                    })
+                    .map(|s| s.0.name.clone())
+                    .collect()
+            })
+            .unwrap_or_default();
+        let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
+        let mut winner = None;
+        for (i, (s, c, t)) in scored.into_iter().enumerate() {
+            if i == 0 && s.rejected.is_empty() {
+                winner = Some((c, t.expect("accepted trials exist")));
+            }
+            ranking.push(s);
+        }
+        match winner {
+            Some((c, t)) => {
+                added.push(c);
+                current = t;
+                effects_added.push(ranking[0].clone());
+                steps.push(DiagnosisStep {
+                    ranking,
+                    added: Some(0),
+                    look_alikes,
+                });
+            }
+            None => {
+                steps.push(DiagnosisStep {
+                    ranking,
+                    added: None,
+                    look_alikes,
+                });
+                break;
+            }
+        }
+    }
+    Ok(Diagnosis {
+        steps,
+        effects_added,
+        before,
+        after: current.validation,
+        theta: current.theta,
+        std: current.std,
+        structure: current.structure,
+    })
+}
+
+/// Scores candidate `c` added to the model with candidates `added`.
+fn score(
+    stats: &CandidateStatistics,
+    added: &[usize],
+    c: usize,
+    current: &Trial,
+    fit_options: &FitOptions,
+    options: &DiagnoseOptions,
+    level: f64,
+) -> (CandidateScore, usize, Option<Trial>) {
+    let cand = &stats.candidates[c];
+    let mut params: Vec<usize> = added
+        .iter()
+        .flat_map(|&a| stats.candidate_params[a].clone())
+        .collect();
+    params.extend_from_slice(&stats.candidate_params[c]);
+    let axes = cand.axes();
+    let mut s = CandidateScore {
+        name: cand.name.clone(),
+        kind: cand.kind,
+        axes: axes.clone(),
+        parameters: Vec::new(),
+        validation_gain: [0.0; 6],
+        total_gain: 0.0,
+        min_p: 1.0,
+        rejected: String::new(),
+    };
+    let t = match trial(stats, &params, fit_options) {
+        Ok(t) => t,
+        Err(e) => {
+            s.rejected = format!("cannot be estimated: {e}");
+            return (s, c, None);
+        }
+    };
+    let own: Vec<usize> = stats.candidate_params[c]
+        .iter()
+        .map(|&p| {
+            let name = &stats.extended.params[p].name;
+            t.structure
+                .param_index(name)
+                .expect("candidate parameter in trial")
+        })
+        .collect();
+    s.parameters = own
+        .iter()
+        .map(|&i| EffectParameter {
+            name: t.structure.params[i].name.clone(),
+            estimate: t.theta[i],
+            std: t.std[i],
+            unit: t.structure.params[i].unit.clone(),
+            p: t.p[i],
+        })
+        .collect();
+    s.min_p = s.parameters.iter().map(|p| p.p).fold(1.0, f64::min);
+    s.validation_gain = gains(&current.validation, &t.validation);
+    s.total_gain = axes
+        .iter()
+        .map(|&a| s.validation_gain[a as usize].max(0.0))
+        .sum();
+    let worst = s.validation_gain.iter().fold(0.0_f64, |m, &g| m.min(g));
+    let best_axis = axes
+        .iter()
+        .map(|&a| s.validation_gain[a as usize])
+        .fold(f64::NEG_INFINITY, f64::max);
+    s.rejected = if s.min_p >= level {
+        format!("not significant (P = {:.2e} >= {level:.2e})", s.min_p)
+    } else if let Some(p) = s
+        .parameters
+        .iter()
+        .find(|p| !plausible(&p.name, p.estimate))
+    {
+        format!("implausible {} = {:.4e} {}", p.name, p.estimate, p.unit)
+    } else if best_axis < options.min_gain {
+        format!(
+            "validation gain {:.1} % below {:.1} %",
+            100.0 * best_axis,
+            100.0 * options.min_gain
+        )
+    } else if worst < -options.max_loss {
+        format!("validation worse by {:.1} % on an axis", -100.0 * worst)
+    } else {
+        String::new()
+    };
+    (s, c, Some(t))
+}

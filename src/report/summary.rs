@@ -1,0 +1,275 @@
+//! The versioned JSON report of `mrsysid fit` (schema documented in docs/report-schema.md)
+//! and its construction from an [`estimate::Fit`](crate::estimate::Fit).
+//!
+//! The printed tables ([`super::tables`]) are rendered from this same structure, so a
+//! number printed equals the number in the JSON to the printed precision.
+
+use serde::{Deserialize, Serialize};
+
+use crate::estimate::{AxisMetrics, Fit, ResidualDiagnostics};
+use crate::model::{ModelOptions, ModelStructure};
+use crate::sample::Axis;
+use crate::vehicle::Vehicle;
+
+/// Version of the JSON report layout; bumped on any incompatible change.
+pub const REPORT_SCHEMA_VERSION: u32 = 1;
+
+/// The whole report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// [`REPORT_SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// `mrsysid` version that wrote the report.
+    pub tool_version: String,
+    /// Samples used to fit.
+    pub samples: u64,
+    /// Samples used for the validation figures.
+    pub validation_samples: u64,
+    /// Where the validation data came from.
+    pub validation_source: String,
+    /// The vehicle.
+    pub vehicle: VehicleSummary,
+    /// Eq. 22 variant.
+    pub model: ModelOptions,
+    /// Degrees of freedom of the t-tests (N − n_θ, N = fit samples).
+    pub degrees_of_freedom: f64,
+    /// MMR estimates (seed Table 5).
+    pub parameters: Vec<ParameterRow>,
+    /// Parameters the data could not identify, dropped before the MMR.
+    pub dropped_parameters: Vec<DroppedRow>,
+    /// MMR fit per axis on the fit data (seed Table 4).
+    pub axes: Vec<AxisRow>,
+    /// The same on the validation data.
+    pub validation: Vec<AxisRow>,
+    /// FSOA table per axis (seed Tables 2–3).
+    pub fsoa: Vec<FsoaReport>,
+    /// Residual covariance R of the per-axis fits, axes in Fx…Mz order.
+    pub residual_covariance: [[f64; 6]; 6],
+    /// Residual normality and whiteness per axis (second pass), when computed.
+    pub normality: Vec<NormalityRow>,
+    /// Conditioning of every solve.
+    pub identifiability: Vec<ConditioningRow>,
+}
+
+/// Vehicle identification in the report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VehicleSummary {
+    /// Name from the vehicle file.
+    pub name: String,
+    /// Configuration class (Definition 1).
+    pub class: String,
+    /// Rotor count.
+    pub rotors: usize,
+}
+
+/// One row of seed Table 5.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParameterRow {
+    /// Parameter name.
+    pub name: String,
+    /// Unit of the estimate ("-" for dimensionless).
+    pub unit: String,
+    /// θ̂.
+    pub estimate: f64,
+    /// σ(θ̂), white residuals.
+    pub std: f64,
+    /// t₀ = θ̂/σ.
+    pub t: f64,
+    /// Two-sided P-value.
+    pub p: f64,
+    /// σ(θ̂) corrected for coloured residuals (Morelli), when the second pass ran.
+    pub std_coloured: Option<f64>,
+}
+
+/// A parameter the data could not identify.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DroppedRow {
+    /// Which solve dropped it (`OLS Fx` … or `MMR`).
+    pub problem: String,
+    /// Dropped term.
+    pub name: String,
+    /// Terms it could not be separated from.
+    pub aliased_with: Vec<String>,
+}
+
+/// One row of seed Table 4.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AxisRow {
+    /// Axis name, `Fx` … `Mz`.
+    pub axis: Axis,
+    /// Centred R².
+    pub r2: f64,
+    /// RMSE / (max z − min z).
+    pub nrmse: f64,
+    /// Theil's inequality coefficient.
+    pub tic: f64,
+    /// Root-mean-square error, N or N m.
+    pub rmse: f64,
+}
+
+impl From<&AxisMetrics> for AxisRow {
+    fn from(m: &AxisMetrics) -> Self {
+        Self {
+            axis: m.axis,
+            r2: m.r2,
+            nrmse: m.nrmse,
+            tic: m.tic,
+            rmse: m.rmse,
+        }
+    }
+}
+
+/// FSOA table of one axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FsoaReport {
+    /// Axis.
+    pub axis: Axis,
+    /// Candidate terms, `param (regressor)`.
+    pub terms: Vec<String>,
+    /// R² per iteration (rows) and candidate (columns); `null` once a term is in.
+    pub r2: Vec<Vec<Option<f64>>>,
+    /// Candidate added at each iteration (index into `terms`).
+    pub order: Vec<usize>,
+    /// Partial F of each added term.
+    pub partial_f: Vec<f64>,
+    /// Leading terms kept by the PSE rule.
+    pub pse_terms: usize,
+    /// Leading terms with partial F ≥ F_in.
+    pub f_in_terms: usize,
+    /// Residual variance σ̂² of the model with all terms, (N or N m)².
+    pub residual_variance: f64,
+}
+
+/// Residual normality and whiteness of one axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NormalityRow {
+    /// Axis.
+    pub axis: Axis,
+    /// Residual mean, N or N m.
+    pub mean: f64,
+    /// Residual standard deviation, N or N m.
+    pub std: f64,
+    /// Correlation of ordered residuals with normal quantiles (1 = Gaussian).
+    pub normal_probability_correlation: f64,
+    /// Lag-1 autocorrelation of the residuals (0 = white).
+    pub lag1_autocorrelation: f64,
+}
+
+/// Conditioning of one solve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConditioningRow {
+    /// `OLS Fx` … `OLS Mz`, or `MMR`.
+    pub problem: String,
+    /// Condition number of the equilibrated design.
+    pub condition_number: f64,
+    /// Largest variance-inflation factor and its term.
+    pub max_vif: Option<(String, f64)>,
+}
+
+impl Report {
+    /// Builds the report from a fit, its validation metrics and (optionally) the residual
+    /// diagnostics of the second pass.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        vehicle: &Vehicle,
+        structure: &ModelStructure,
+        fit: &Fit,
+        validation: &[AxisMetrics; 6],
+        validation_samples: u64,
+        validation_source: &str,
+        diagnostics: Option<&ResidualDiagnostics>,
+    ) -> Self {
+        let coloured = |name: &str| {
+            diagnostics.and_then(|d| {
+                d.std_errors
+                    .iter()
+                    .find(|s| s.name == name)
+                    .map(|s| s.coloured)
+                    .filter(|v| v.is_finite())
+            })
+        };
+        Self {
+            schema_version: REPORT_SCHEMA_VERSION,
+            tool_version: env!("CARGO_PKG_VERSION").to_string(),
+            samples: fit.samples,
+            validation_samples,
+            validation_source: validation_source.to_string(),
+            vehicle: VehicleSummary {
+                name: vehicle.name.clone(),
+                class: vehicle.class().to_string(),
+                rotors: vehicle.rotor_count(),
+            },
+            model: structure.options,
+            degrees_of_freedom: fit.mmr.dof,
+            parameters: fit
+                .mmr
+                .parameters
+                .iter()
+                .map(|p| ParameterRow {
+                    name: p.name.clone(),
+                    unit: p.unit.clone(),
+                    estimate: p.estimate,
+                    std: p.std_error,
+                    t: p.t,
+                    p: p.p_value,
+                    std_coloured: coloured(&p.name),
+                })
+                .collect(),
+            dropped_parameters: fit
+                .identifiability
+                .iter()
+                .flat_map(|c| {
+                    c.dropped.iter().map(|d| DroppedRow {
+                        problem: c.problem.clone(),
+                        name: d.name.clone(),
+                        aliased_with: d.aliased_with.clone(),
+                    })
+                })
+                .collect(),
+            axes: fit.metrics.iter().map(AxisRow::from).collect(),
+            validation: validation.iter().map(AxisRow::from).collect(),
+            fsoa: fit
+                .axes
+                .iter()
+                .map(|a| FsoaReport {
+                    axis: a.fsoa.axis,
+                    terms: a.fsoa.terms.clone(),
+                    r2: a.fsoa.steps.iter().map(|s| s.r2.clone()).collect(),
+                    order: a.fsoa.order(),
+                    partial_f: a.fsoa.steps.iter().map(|s| s.partial_f).collect(),
+                    pse_terms: a.fsoa.pse_terms,
+                    f_in_terms: a.fsoa.f_in_terms,
+                    residual_variance: a.ols.residual_variance,
+                })
+                .collect(),
+            residual_covariance: fit.residual_covariance,
+            normality: diagnostics
+                .map(|d| {
+                    d.axes
+                        .iter()
+                        .map(|a| NormalityRow {
+                            axis: a.axis,
+                            mean: a.mean,
+                            std: a.std_dev,
+                            normal_probability_correlation: a.normal_probability_correlation,
+                            lag1_autocorrelation: a
+                                .autocorrelation
+                                .get(1)
+                                .copied()
+                                .unwrap_or(f64::NAN),
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            identifiability: fit
+                .identifiability
+                .iter()
+                .map(|c| ConditioningRow {
+                    problem: c.problem.clone(),
+                    condition_number: c.condition_number,
+                    max_vif: c.vif.iter().max_by(|a, b| a.1.total_cmp(&b.1)).cloned(),
+                })
+                .collect(),
+        }
+    }
+}

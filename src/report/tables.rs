@@ -1,0 +1,245 @@
+//! Paper-style text tables of a [`Report`]: FSOA (seed Tables 2–3), MMR fit per axis
+//! (Table 4), parameters (Table 5), residual covariance, normality and identifiability.
+//!
+//! Everything printed comes from the [`Report`], so it equals the JSON to the printed
+//! precision.
+
+use std::fmt::Write;
+
+use super::summary::{FsoaReport, Report};
+
+/// All tables, as printed by `mrsysid fit`.
+pub fn render(report: &Report) -> String {
+    let mut out = String::new();
+    header(&mut out, report);
+    for f in &report.fsoa {
+        fsoa_table(&mut out, f);
+    }
+    fit_table(&mut out, report);
+    parameter_table(&mut out, report);
+    covariance_table(&mut out, report);
+    normality_table(&mut out, report);
+    identifiability(&mut out, report);
+    out
+}
+
+fn header(out: &mut String, r: &Report) {
+    let _ = writeln!(
+        out,
+        "mrsysid {}: vehicle {} ({}, {} rotors); {} fit samples, {} validation samples ({})",
+        r.tool_version,
+        r.vehicle.name,
+        r.vehicle.class,
+        r.vehicle.rotors,
+        r.samples,
+        r.validation_samples,
+        r.validation_source
+    );
+    let _ = writeln!(
+        out,
+        "model: Eq. 22, inflow correction {:?}, terms linear in Vh {}, J_z terms {:?}\n",
+        r.model.inflow,
+        if r.model.linear_vh_terms {
+            "kept"
+        } else {
+            "removed"
+        },
+        r.model.rotor_inertia
+    );
+}
+
+/// FSOA table, one row per candidate term and one column per iteration (the seed's
+/// Tables 2–3 transposed so long term names fit); `*` marks the term added.
+fn fsoa_table(out: &mut String, f: &FsoaReport) {
+    let _ = writeln!(
+        out,
+        "FSOA {}: R^2 [%] per iteration (* = term added)",
+        f.axis
+    );
+    let width = f.terms.iter().map(String::len).max().unwrap_or(4).max(4);
+    let _ = write!(out, "  {:<width$}", "term");
+    for i in 1..=f.r2.len() {
+        let _ = write!(out, " {:>8}", i);
+    }
+    out.push('\n');
+    for (j, term) in f.terms.iter().enumerate() {
+        let _ = write!(out, "  {term:<width$}");
+        for (i, row) in f.r2.iter().enumerate() {
+            let cell = match row.get(j).copied().flatten() {
+                Some(v) if f.order.get(i) == Some(&j) => format!("{:.1}*", 100.0 * v),
+                Some(v) => format!("{:.1}", 100.0 * v),
+                None => "-".to_string(),
+            };
+            let _ = write!(out, " {cell:>8}");
+        }
+        out.push('\n');
+    }
+    let _ = writeln!(
+        out,
+        "  sigma^2 = {:.3e}; PSE keeps the first {} terms, partial F >= F_in keeps {}\n",
+        f.residual_variance, f.pse_terms, f.f_in_terms
+    );
+}
+
+fn fit_table(out: &mut String, r: &Report) {
+    let _ = writeln!(out, "MMR fit per axis (Table 4)");
+    let _ = writeln!(
+        out,
+        "  {:<4} {:>10} {:>8} {:>8} {:>12} | {:>10} {:>8} {:>8}",
+        "axis", "NRMSE [%]", "TIC", "R2 [%]", "RMSE", "val NRMSE%", "val TIC", "val R2%"
+    );
+    for (a, v) in r.axes.iter().zip(&r.validation) {
+        let _ = writeln!(
+            out,
+            "  {:<4} {:>10.2} {:>8.3} {:>8.1} {:>12.4e} | {:>10.2} {:>8.3} {:>8.1}",
+            a.axis.name(),
+            100.0 * a.nrmse,
+            a.tic,
+            100.0 * a.r2,
+            a.rmse,
+            100.0 * v.nrmse,
+            v.tic,
+            100.0 * v.r2
+        );
+    }
+    out.push('\n');
+}
+
+/// Power of ten k such that |x|·10^k lies in [1, 1000), for a readable scaled estimate.
+fn scale_exponent(x: f64) -> i32 {
+    if x == 0.0 || !x.is_finite() {
+        0
+    } else {
+        -(x.abs().log10().floor() as i32).div_euclid(3) * 3
+    }
+}
+
+fn p_value(p: f64) -> String {
+    if p == 0.0 {
+        "< 1e-300".to_string()
+    } else if p < 1e-3 {
+        format!("{p:.2e}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
+fn parameter_table(out: &mut String, r: &Report) {
+    let _ = writeln!(
+        out,
+        "MMR parameter estimates (Table 5), t-tests with {} degrees of freedom",
+        r.degrees_of_freedom
+    );
+    let _ = writeln!(
+        out,
+        "  {:<14} {:>7} {:>11} {:>11} {:>9} {:>10} {:>11}  unit",
+        "parameter", "scale", "estimate", "std", "|t0|", "P-value", "std (col.)"
+    );
+    for p in &r.parameters {
+        let k = scale_exponent(p.estimate);
+        let s = 10f64.powi(k);
+        let coloured = p
+            .std_coloured
+            .map_or("-".to_string(), |c| format!("{:.4}", c * s));
+        let _ = writeln!(
+            out,
+            "  {:<14} {:>7} {:>11.4} {:>11.4} {:>9.1} {:>10} {:>11}  {}",
+            p.name,
+            format!("x1e{k}"),
+            p.estimate * s,
+            p.std * s,
+            p.t.abs(),
+            p_value(p.p),
+            coloured,
+            p.unit
+        );
+    }
+    out.push('\n');
+}
+
+fn covariance_table(out: &mut String, r: &Report) {
+    let _ = writeln!(out, "Residual covariance R (units N and N m)");
+    let names = ["Fx", "Fy", "Fz", "Mx", "My", "Mz"];
+    let _ = write!(out, "  {:<4}", "");
+    for n in names {
+        let _ = write!(out, " {n:>11}");
+    }
+    out.push('\n');
+    for (n, row) in names.iter().zip(&r.residual_covariance) {
+        let _ = write!(out, "  {n:<4}");
+        for v in row {
+            let _ = write!(out, " {v:>11.3e}");
+        }
+        out.push('\n');
+    }
+    out.push('\n');
+}
+
+fn normality_table(out: &mut String, r: &Report) {
+    if r.normality.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "Residual normality (Figure 3) and whiteness");
+    let _ = writeln!(
+        out,
+        "  {:<4} {:>12} {:>12} {:>14} {:>10}",
+        "axis", "mean", "std", "normal corr.", "lag-1 ac"
+    );
+    for n in &r.normality {
+        let _ = writeln!(
+            out,
+            "  {:<4} {:>12.4e} {:>12.4e} {:>14.4} {:>10.3}",
+            n.axis.name(),
+            n.mean,
+            n.std,
+            n.normal_probability_correlation,
+            n.lag1_autocorrelation
+        );
+    }
+    out.push('\n');
+}
+
+fn identifiability(out: &mut String, r: &Report) {
+    let _ = writeln!(out, "Identifiability");
+    for c in &r.identifiability {
+        let vif = c.max_vif.as_ref().map_or(String::new(), |(n, v)| {
+            format!(", largest VIF {v:.3e} ({n})")
+        });
+        let _ = writeln!(
+            out,
+            "  {:<7} condition number {:.3e}{vif}",
+            c.problem, c.condition_number
+        );
+    }
+    for d in &r.dropped_parameters {
+        let _ = writeln!(
+            out,
+            "  WARNING {}: dropped {} (not separable from {})",
+            d.problem,
+            d.name,
+            d.aliased_with.join(", ")
+        );
+    }
+    out.push('\n');
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scale_puts_estimates_in_one_to_a_thousand() {
+        for (x, k) in [
+            (0.0154, 3),
+            (21.4, 0),
+            (3.0e-5, 6),
+            (-0.00136, 3),
+            (1234.0, -3),
+        ] {
+            let e = scale_exponent(x);
+            assert_eq!(e, k, "{x}");
+            let s = x.abs() * 10f64.powi(e);
+            assert!((1.0..1000.0).contains(&s), "{x}: {s}");
+        }
+    }
+}
