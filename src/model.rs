@@ -500,7 +500,10 @@ impl ModelStructure {
             .iter()
             .map(|&j| {
                 let mut c = self.columns[j].clone();
-                c.param = keep.iter().position(|&p| p == c.param).expect("kept parameter");
+                c.param = keep
+                    .iter()
+                    .position(|&p| p == c.param)
+                    .expect("kept parameter");
                 c
             })
             .collect();
