@@ -8,7 +8,8 @@
 //! - [`airframe`]: per-rotor loads carried to the airframe and summed (§4.1, Eq. 10–18);
 //! - [`mixing`]: virtual actuators (Eq. 19–21);
 //! - [`model`]: the Eq. 22 regressors as data, batch assembly;
-//! - [`sample`]: the data contract, as structure-of-arrays chunks.
+//! - [`sample`]: the data contract, as structure-of-arrays chunks;
+//! - [`sim`]: the truth simulator (blade-element rotors, effects, sweeps, flights).
 
 #![warn(missing_docs)]
 
@@ -17,6 +18,7 @@ pub mod mixing;
 pub mod model;
 pub mod rotor;
 pub mod sample;
+pub mod sim;
 pub mod vehicle;
 
 /// Number of samples per chunk in streaming passes: one place that decides it.
