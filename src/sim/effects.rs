@@ -8,7 +8,7 @@
 //! | `ground_effect[=k]` | k (–, default 1) | Cheeseman–Bennett: each rotor's thrust × 1/(1 − k (R/4z)²), z = hub height above ground, capped at z ≥ R/2 (ratio ≤ 1/(1 − k/4)); needs height |
 //! | `weak_rotor=i,s[,s_q]` | rotor i (1-based), thrust scale s, torque scale s_q (default s) | a damaged propeller: rotor i's force and hub roll/pitch moment × s, its drag torque × s_q |
 //! | `cg_offset=dx,dy,dz` | m, body axes | the true CG sits at d from the reference point of the vehicle file: hubs at r_i − d, moments about the true CG |
-//! | `wake_interaction=k` | k (–) | rotor i loses the fraction k Σ_j o_ij V_h²/(V_h² + ν0²) of its thrust, o_ij = max(0, 1 − e_ij/2R) the overlap of rotor j's wake (swept downstream along −V_h) with rotor i at lateral miss distance e_ij, for rotors i downstream of j |
+//! | `wake_interaction=k` | k (–) | rotor i loses the fraction k min(1, Σ_j o_ij) V_h²/(V_h² + ν0²) of its thrust, o_ij = max(0, 1 − e_ij/2R) the overlap of rotor j's wake (swept downstream along −V_h) with rotor i at lateral miss distance e_ij, for rotors i downstream of j |
 //! | `quadratic_drag=cx,cy,cz` | drag areas C_d A per body axis, m² | F_k = −½ ρ (C_d A)_k v_k |v_k| at the CG (air-relative velocity) |
 //! | `vortex_ring=k` | k (–, peak fractional thrust loss) | each rotor's thrust × (1 − k exp(−((w_i/ν0 − 1)/0.5)²) exp(−(V_h/ν0)²)), w_i its descent speed (down +) |
 //! | `delay=τ` | s | the logged rotor speed is the true one τ seconds earlier (flight only) |

@@ -13,8 +13,10 @@
 //!
 //! Branch choice and vortex-ring guard: the relation has up to three roots in descent.
 //! The normal working state (largest root, flow down through the disc) is used while it
-//! is an increasing branch, i.e. while w·V_h < T/(2ρA); otherwise (fast descent,
-//! windmill state) the root in (0, w) is found by bisection. Both are bracketed, so the
+//! is an increasing branch, i.e. while w·V_h < T/(2ρA); otherwise (fast descent with
+//! forward speed, windmill side) a root in (0, w) is found by bisection. In purely axial
+//! descent faster than 2ν_h the normal-working-state root is kept, which is outside the
+//! simulator's domain (sweeps stop at 0.45 ν0, or 1.6 ν0 with `vortex_ring`). Both are bracketed, so the
 //! solver never diverges or returns NaN; near the vortex-ring state (descent at
 //! 0.5–1.5 ν_h) momentum theory itself is unreliable and the thrust loss observed there is
 //! modelled by the `vortex_ring` effect ([`super::effects`]).
