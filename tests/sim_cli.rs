@@ -70,3 +70,39 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
     assert!(text.starts_with("t,u,v,w,p,q,r,omega_1,"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A bad `--rotor` file is refused with the file, the line and the reason.
+#[test]
+fn bad_rotor_file_names_file_line_and_field() {
+    let dir = std::env::temp_dir().join(format!("mrsysid-sim-rotor-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rotor = dir.join("rotor.toml");
+    let out = dir.join("out.csv");
+    for (text, needles) in [
+        (
+            "blades = 2\nchord = \"x\"\n",
+            vec!["rotor.toml", "line 2", "expected f64"],
+        ),
+        ("\nbogus = 1\n", vec!["line 2", "unknown field `bogus`"]),
+        ("stall_angle = 1.2\n", vec!["stall_angle", "below pi/4"]),
+    ] {
+        std::fs::write(&rotor, text).unwrap();
+        let (ok, err) = run(&[
+            "simulate",
+            "--preset",
+            "quad_x",
+            "--mode",
+            "sweep",
+            "--rotor",
+            rotor.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(!ok);
+        for n in needles {
+            assert!(err.contains(n), "{text:?}: {err}");
+        }
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

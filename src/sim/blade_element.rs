@@ -18,8 +18,6 @@
 
 use std::f64::consts::PI;
 
-use serde::Deserialize;
-
 use crate::rotor::BladeConstants;
 use crate::vehicle::{STANDARD_GRAVITY, Vehicle};
 
@@ -82,8 +80,7 @@ pub const DEFAULT_HOVER_BLADE_LOADING: f64 = 0.1;
 
 /// Values of an optional `--rotor` TOML file; every field is optional and falls back to
 /// the sizing of [`BladeDescription::sized_for`].
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Default)]
 pub struct BladeOverrides {
     /// Blade count.
     pub blades: Option<u32>,

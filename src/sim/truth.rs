@@ -19,11 +19,9 @@ pub const DEFAULT_AZIMUTH_STATIONS: usize = 12;
 
 /// The `--rotor` TOML file: blade overrides (see [`BladeOverrides`]) plus airframe and
 /// motor values. Every field is optional.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Default)]
 pub struct RotorFile {
     /// Blade values.
-    #[serde(flatten)]
     pub blade: BladeOverrides,
     /// Linear airframe drag per body axis, N s/m (default ½ ρ S_f ν0 with S_f = ℓ²/4 for
     /// x, y and ℓ²/2 for z: the central body in the rotor wash).
@@ -36,17 +34,63 @@ pub struct RotorFile {
     pub azimuth_stations: Option<usize>,
 }
 
+/// The file as written: one flat table (no serde flatten, so TOML errors keep the
+/// position of the offending field).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RotorFileToml {
+    blades: Option<u32>,
+    chord: Option<f64>,
+    theta0: Option<f64>,
+    theta_tw: Option<f64>,
+    root_cutout: Option<f64>,
+    lift_slope: Option<f64>,
+    cd0: Option<f64>,
+    cd2: Option<f64>,
+    stall_angle: Option<f64>,
+    cd_flat_plate: Option<f64>,
+    hover_tip_speed: Option<f64>,
+    linear_drag: Option<[f64; 3]>,
+    motor_time_constant: Option<f64>,
+    radial_stations: Option<usize>,
+    azimuth_stations: Option<usize>,
+}
+
 impl RotorFile {
-    /// Reads a rotor file; errors name the file and the field.
+    /// Reads a rotor file; errors name the file, the line and the field.
     pub fn from_toml_file(path: &Path) -> Result<Self, String> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| format!("{}: cannot read file: {e}", path.display()))?;
-        toml::from_str(&text).map_err(|e| {
+        Self::from_toml_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Parses rotor-file text.
+    pub fn from_toml_str(text: &str) -> Result<Self, String> {
+        let f: RotorFileToml = toml::from_str(text).map_err(|e| {
             let at = e
                 .span()
-                .map(|s| format!(" at byte {}", s.start))
+                .map(|s| format!(" on line {}", line_of(text, s.start)))
                 .unwrap_or_default();
-            format!("{}: TOML error{at}: {}", path.display(), e.message().trim())
+            format!("TOML error{at}: {}", e.message().trim())
+        })?;
+        Ok(Self {
+            blade: BladeOverrides {
+                blades: f.blades,
+                chord: f.chord,
+                theta0: f.theta0,
+                theta_tw: f.theta_tw,
+                root_cutout: f.root_cutout,
+                lift_slope: f.lift_slope,
+                cd0: f.cd0,
+                cd2: f.cd2,
+                stall_angle: f.stall_angle,
+                cd_flat_plate: f.cd_flat_plate,
+                hover_tip_speed: f.hover_tip_speed,
+            },
+            linear_drag: f.linear_drag,
+            motor_time_constant: f.motor_time_constant,
+            radial_stations: f.radial_stations,
+            azimuth_stations: f.azimuth_stations,
         })
     }
 }
@@ -223,6 +267,15 @@ impl TruthModel {
         }
         out
     }
+}
+
+/// 1-based line number of byte `offset` in `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
 }
 
 fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
