@@ -12,6 +12,7 @@
 //! - [`stats`]: one-pass mergeable statistics of the regressors and outputs;
 //! - [`estimate`]: the two-step estimation of §5 (OLS, FSOA, MMR, inference,
 //!   diagnostics, identifiability).
+//! - [`sim`]: the truth simulator (blade-element rotors, effects, sweeps, flights).
 
 #![warn(missing_docs)]
 
@@ -24,6 +25,7 @@ pub mod model;
 pub mod report;
 pub mod rotor;
 pub mod sample;
+pub mod sim;
 pub mod stats;
 pub mod vehicle;
 

@@ -1,0 +1,419 @@
+//! Time-domain flights: the rigid-body equations of seed Eq. 1 integrated by fixed-step
+//! RK4 with first-order motor dynamics Ω̇ = (Ω_cmd − Ω)/τ_m, flown by the cascaded
+//! [`Controller`] along an aggressive reference, logged through [`Sensors`].
+//!
+//! State: NED position, body velocity relative to the ground v, attitude quaternion
+//! (body → NED), body rates ω, rotor speeds Ω. Eq. 1: ṗ = R v, Ṙ = R[ω×],
+//! v̇ = v × ω + g Rᵀe₃ + F/m, ω̇ = I⁻¹(Iω × ω + M), with F, M the truth wrench at the
+//! air-relative velocity v − Rᵀ w_wind.
+//!
+//! Reference (Froude-scaled by s = √(ℓ/ℓ_ref), lengths × s², times × s): a figure-of-eight
+//! with 30 s² m along north at 0.5/s rad/s (15 s m/s peak) and 7 s² m east at twice the
+//! frequency, altitude swings of 12 s² m (climb and descent to ~4 s m/s), heading
+//! oscillation ±1.2 rad at 1.7/s rad/s, and a multisine roll/pitch excitation (0.07 rad
+//! per tone at 0.6, 1.3 and 2.2 Hz ÷ s, random phases) added to the attitude command.
+//! Over the first 8 s the tones start from rest: their time argument is ∫env dt with a
+//! smoothstep envelope, so frequencies (and the excitation amplitude) ramp in. With ground effect on, the altitude swings start
+//! from a hub height of 2R so the flight makes passes near the ground.
+
+use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+
+use super::controller::{Controller, Gains, Reference};
+use super::inflow::InflowState;
+use super::output::LogTable;
+use super::sensors::{SensorConfig, Sensors};
+use super::test_matrix::REFERENCE_ARM;
+use super::truth::{TruthInput, TruthModel};
+use crate::sample::{Sample, SampleChunk};
+use crate::vehicle::STANDARD_GRAVITY;
+
+/// Length of the ramp-in of the reference, s (× the Froude time scale).
+pub const RAMP_SECONDS: f64 = 8.0;
+/// Amplitude of each roll/pitch excitation tone, rad.
+pub const EXCITATION_PER_TONE: f64 = 0.07;
+
+/// Settings of one flight.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlightConfig {
+    /// Flight duration, s.
+    pub duration: f64,
+    /// RK4 integration step, s.
+    pub step: f64,
+    /// Log rate, Hz; the step must divide the log period.
+    pub log_rate: f64,
+    /// Sensor models.
+    pub sensors: SensorConfig,
+    /// Omit the true force/moment columns (an "IMU only" log).
+    pub imu_only: bool,
+}
+
+impl Default for FlightConfig {
+    /// 60 s at a 500 Hz RK4 step, logged at 100 Hz, default sensors, with true wrench.
+    fn default() -> Self {
+        Self {
+            duration: 60.0,
+            step: 0.002,
+            log_rate: 100.0,
+            sensors: SensorConfig::default(),
+            imu_only: false,
+        }
+    }
+}
+
+/// Extremes of a flight, for stability checks.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FlightSummary {
+    /// Largest tilt of the body z axis from vertical, rad.
+    pub max_tilt: f64,
+    /// Largest distance from the reference position, m.
+    pub max_position_error: f64,
+    /// Largest ground speed, m/s.
+    pub max_speed: f64,
+    /// Largest |ω|, rad/s.
+    pub max_rate: f64,
+    /// Lowest CG height above ground, m.
+    pub min_height: f64,
+}
+
+/// A flown and logged flight.
+#[derive(Debug, Clone)]
+pub struct FlightLog {
+    /// The logged samples (sensor values; wrench true).
+    pub samples: SampleChunk,
+    /// Logged accelerometer specific force ax, ay, az, m/s².
+    pub specific_force: [Vec<f64>; 3],
+    /// The log as a table in the CSV data contract.
+    pub table: LogTable,
+    /// Extremes over the flight.
+    pub summary: FlightSummary,
+}
+
+/// The aggressive reference of the module documentation.
+#[derive(Debug, Clone)]
+pub struct Manoeuvre {
+    scale: f64,
+    base_height: f64,
+    phases: [f64; 6],
+}
+
+impl Manoeuvre {
+    /// The reference for `model`'s vehicle, phases drawn from `rng`.
+    pub fn new(model: &TruthModel, rng: &mut StdRng) -> Self {
+        let scale = (model.vehicle.arm_length() / REFERENCE_ARM).sqrt();
+        let base_height = if model.effects.ground_effect().is_some() {
+            2.0 * model.vehicle.props.rotor_radius - model.vehicle.props.hub_height
+        } else {
+            3.0 * scale * scale
+        };
+        let phases = [0; 6].map(|_| rng.random_range(0.0..std::f64::consts::TAU));
+        Self {
+            scale,
+            base_height,
+            phases,
+        }
+    }
+
+    fn position(&self, t: f64) -> (Vector3<f64>, f64, [f64; 2]) {
+        let s = self.scale;
+        let l = s * s;
+        // Amplitude envelope (smoothstep over the ramp) and warped time ∫env dt, so every
+        // tone starts from rest and reaches its full frequency at the end of the ramp.
+        let ramp = RAMP_SECONDS * s;
+        let x = (t / ramp).clamp(0.0, 1.0);
+        let env = x * x * (3.0 - 2.0 * x);
+        let warped = if t < ramp {
+            ramp * (x.powi(3) - 0.5 * x.powi(4))
+        } else {
+            0.5 * ramp + (t - ramp)
+        };
+        let ts = warped / s;
+        let pos = Vector3::new(
+            30.0 * l * (0.5 * ts).sin(),
+            7.0 * l * (1.0 * ts).sin(),
+            -(self.base_height + 6.0 * l * (1.0 - (0.7 * ts).cos())),
+        );
+        let yaw = 1.2 * (1.7 * ts).sin();
+        let tau = std::f64::consts::TAU;
+        let tone =
+            |k: usize, f: f64| EXCITATION_PER_TONE * (tau * f * t / s + self.phases[k]).sin();
+        let exc = [
+            env * (tone(0, 0.6) + tone(1, 1.3) + tone(2, 2.2)),
+            env * (tone(3, 0.6) + tone(4, 1.3) + tone(5, 2.2)),
+        ];
+        (pos, yaw, exc)
+    }
+
+    /// Reference at time `t` (s); derivatives by central differences (h = 1 ms).
+    pub fn reference(&self, t: f64) -> Reference {
+        let h = 1e-3;
+        let (p0, yaw, excitation) = self.position(t);
+        let (pm, yaw_m, _) = self.position(t - h);
+        let (pp, yaw_p, _) = self.position(t + h);
+        Reference {
+            position: p0,
+            velocity: (pp - pm) / (2.0 * h),
+            acceleration: (pp - 2.0 * p0 + pm) / (h * h),
+            yaw,
+            yaw_rate: (yaw_p - yaw_m) / (2.0 * h),
+            excitation,
+        }
+    }
+}
+
+/// Rigid-body state; `x` = [position(3), body velocity(3), quaternion w,x,y,z(4),
+/// rates(3), rotor speeds(N)].
+struct Dynamics<'a> {
+    model: &'a TruthModel,
+    inertia: Matrix3<f64>,
+    inertia_inv: Matrix3<f64>,
+    wind: Vector3<f64>,
+}
+
+impl Dynamics<'_> {
+    /// Writes ẋ into `dx` and returns the wrench (and Ω̇ into `omega_dot`).
+    fn derivative(
+        &self,
+        x: &[f64],
+        cmd: &[f64],
+        inflow: &mut [InflowState],
+        dx: &mut [f64],
+        omega_dot: &mut [f64],
+    ) -> [f64; 6] {
+        let tau = self.model.motor_time_constant;
+        let q = UnitQuaternion::from_quaternion(Quaternion::new(x[6], x[7], x[8], x[9]));
+        let rot = q.to_rotation_matrix();
+        let r = rot.matrix();
+        let v = Vector3::new(x[3], x[4], x[5]);
+        let w = Vector3::new(x[10], x[11], x[12]);
+        let omega = &x[13..];
+        for ((d, c), o) in omega_dot.iter_mut().zip(cmd).zip(omega) {
+            *d = (c - o) / tau;
+        }
+        let v_air = v - r.transpose() * self.wind;
+        let wrench = self.model.wrench(
+            &TruthInput {
+                velocity: [v_air.x, v_air.y, v_air.z],
+                rates: [w.x, w.y, w.z],
+                omega,
+                omega_dot,
+                height: Some(-x[2]),
+                down_row: Some([r[(2, 0)], r[(2, 1)], r[(2, 2)]]),
+            },
+            inflow,
+        );
+        let f = Vector3::new(wrench[0], wrench[1], wrench[2]);
+        let m = Vector3::new(wrench[3], wrench[4], wrench[5]);
+        let pdot = r * v;
+        let qdot =
+            Quaternion::new(x[6], x[7], x[8], x[9]) * Quaternion::new(0.0, w.x, w.y, w.z) * 0.5;
+        let vdot = v.cross(&w)
+            + STANDARD_GRAVITY * r.transpose() * Vector3::z()
+            + f / self.model.vehicle.props.mass;
+        let wdot = self.inertia_inv * ((self.inertia * w).cross(&w) + m);
+        dx[0..3].copy_from_slice(pdot.as_slice());
+        dx[3..6].copy_from_slice(vdot.as_slice());
+        dx[6..10].copy_from_slice(&[qdot.w, qdot.i, qdot.j, qdot.k]);
+        dx[10..13].copy_from_slice(wdot.as_slice());
+        dx[13..].copy_from_slice(omega_dot);
+        wrench
+    }
+}
+
+/// Flies `model` for `config` with seed `seed`; an error says when and how the flight
+/// diverged (tilt beyond 90°, ground contact, or 50 s² m from the reference).
+pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<FlightLog, String> {
+    if !(config.step > 0.0 && config.duration > 0.0 && config.log_rate > 0.0) {
+        return Err("flight: duration, step and log rate must be > 0".into());
+    }
+    let ratio = (1.0 / (config.step * config.log_rate)).round();
+    if ratio < 1.0 || (ratio * config.step * config.log_rate - 1.0).abs() > 1e-9 {
+        return Err(format!(
+            "flight: the log period 1/{} s must be a whole number of integration steps of {} s",
+            config.log_rate, config.step
+        ));
+    }
+    let ratio = ratio as usize;
+    let vehicle = &model.vehicle;
+    let n = vehicle.rotor_count();
+    let mut rng = StdRng::seed_from_u64(seed);
+    let manoeuvre = Manoeuvre::new(model, &mut rng);
+    let sensors = Sensors::new(config.sensors, &mut rng);
+    let inertia = Matrix3::from_fn(|r, c| vehicle.props.inertia[r][c]);
+    let wind = model.effects.wind();
+    let dynamics = Dynamics {
+        model,
+        inertia,
+        inertia_inv: inertia.try_inverse().ok_or("flight: singular inertia")?,
+        wind: Vector3::new(wind[0], wind[1], wind[2]),
+    };
+    let mut inflow = model.inflow_states();
+    let hover_torque = {
+        let kin = super::blade_element::RotorKinematics {
+            omega: model.hover_omega,
+            spin: 1.0,
+            hub_velocity: [0.0; 3],
+            body_rates: [0.0; 3],
+        };
+        -model
+            .rotor
+            .loads(&kin, &model.inflow, &mut InflowState::default())
+            .moment[2]
+    };
+    let controller = Controller::new(
+        vehicle,
+        model.hover_omega,
+        hover_torque,
+        Gains::for_time_scale(manoeuvre.scale),
+    );
+    let r0 = manoeuvre.reference(0.0);
+    let mut x = vec![0.0; 13 + n];
+    x[0..3].copy_from_slice(r0.position.as_slice());
+    x[6] = 1.0;
+    x[13..].fill(model.hover_omega);
+    let steps = (config.duration / config.step).round() as usize;
+    let n_log = steps / ratio + 1;
+    let mut samples = SampleChunk::with_capacity(n, n_log, true);
+    let mut specific_force: [Vec<f64>; 3] = Default::default();
+    let mut summary = FlightSummary {
+        min_height: f64::INFINITY,
+        ..Default::default()
+    };
+    let delay_steps = model.effects.delay() / config.step;
+    let mut history: Vec<f64> = Vec::with_capacity((steps + 1) * 2 * n);
+    let mut cmd = vec![0.0; n];
+    let mut omega_dot = vec![0.0; n];
+    let (mut k1, mut k2, mut k3, mut k4) = (
+        vec![0.0; 13 + n],
+        vec![0.0; 13 + n],
+        vec![0.0; 13 + n],
+        vec![0.0; 13 + n],
+    );
+    let mut tmp = vec![0.0; 13 + n];
+    let mut sample = Sample {
+        omega: vec![0.0; n],
+        omega_dot: vec![0.0; n],
+        ..Default::default()
+    };
+    for step in 0..=steps {
+        let t = step as f64 * config.step;
+        let reference = manoeuvre.reference(t);
+        let q = UnitQuaternion::from_quaternion(Quaternion::new(x[6], x[7], x[8], x[9]));
+        let rot: Rotation3<f64> = q.to_rotation_matrix();
+        let pos = Vector3::new(x[0], x[1], x[2]);
+        let v_ned = rot * Vector3::new(x[3], x[4], x[5]);
+        let rates = Vector3::new(x[10], x[11], x[12]);
+        controller.command(&reference, &pos, &v_ned, &rot, &rates, &mut cmd);
+        let wrench = dynamics.derivative(&x, &cmd, &mut inflow, &mut k1, &mut omega_dot);
+        history.extend_from_slice(&x[13..]);
+        history.extend_from_slice(&omega_dot);
+        // Extremes and divergence checks.
+        let tilt = rot.matrix()[(2, 2)].clamp(-1.0, 1.0).acos();
+        let err = (reference.position - pos).norm();
+        summary.max_tilt = summary.max_tilt.max(tilt);
+        summary.max_position_error = summary.max_position_error.max(err);
+        summary.max_speed = summary.max_speed.max(v_ned.norm());
+        summary.max_rate = summary.max_rate.max(rates.norm());
+        summary.min_height = summary.min_height.min(-x[2]);
+        let l = manoeuvre.scale * manoeuvre.scale;
+        if !(tilt < std::f64::consts::FRAC_PI_2
+            && err < 50.0 * l
+            && -x[2] > 0.0
+            && x.iter().all(|v| v.is_finite()))
+        {
+            return Err(format!(
+                "flight diverged at t = {t:.3} s: tilt {:.1} deg, {err:.2} m from the reference, height {:.2} m",
+                tilt.to_degrees(),
+                -x[2]
+            ));
+        }
+        if step % ratio == 0 {
+            log_sample(
+                &mut sample,
+                t,
+                &x,
+                &wrench,
+                &history,
+                step as f64 - delay_steps,
+                &sensors,
+                &mut rng,
+                &q,
+            );
+            samples.push(&sample);
+            let a =
+                sensors.accelerometer([0, 1, 2].map(|k| wrench[k] / vehicle.props.mass), &mut rng);
+            for k in 0..3 {
+                specific_force[k].push(a[k]);
+            }
+        }
+        if step == steps {
+            break;
+        }
+        // RK4 with the command held over the step.
+        let h = config.step;
+        for i in 0..x.len() {
+            tmp[i] = x[i] + 0.5 * h * k1[i];
+        }
+        dynamics.derivative(&tmp, &cmd, &mut inflow, &mut k2, &mut omega_dot);
+        for i in 0..x.len() {
+            tmp[i] = x[i] + 0.5 * h * k2[i];
+        }
+        dynamics.derivative(&tmp, &cmd, &mut inflow, &mut k3, &mut omega_dot);
+        for i in 0..x.len() {
+            tmp[i] = x[i] + h * k3[i];
+        }
+        dynamics.derivative(&tmp, &cmd, &mut inflow, &mut k4, &mut omega_dot);
+        for i in 0..x.len() {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+        let norm = (x[6] * x[6] + x[7] * x[7] + x[8] * x[8] + x[9] * x[9]).sqrt();
+        x[6..10].iter_mut().for_each(|c| *c /= norm);
+    }
+    let mut table = LogTable::from_chunk(&samples, !config.imu_only);
+    for (k, name) in ["ax", "ay", "az"].iter().enumerate() {
+        table.insert_before("height", name, specific_force[k].clone());
+    }
+    Ok(FlightLog {
+        samples,
+        specific_force,
+        table,
+        summary,
+    })
+}
+
+/// Fills `s` with the logged values at time `t`: gyro, velocity estimate (ground-relative
+/// body velocity), eRPM rotor speeds and true Ω̇ at the (possibly delayed) step
+/// `delayed_step`, true wrench, height and attitude.
+#[allow(clippy::too_many_arguments)]
+fn log_sample(
+    s: &mut Sample,
+    t: f64,
+    x: &[f64],
+    wrench: &[f64; 6],
+    history: &[f64],
+    delayed_step: f64,
+    sensors: &Sensors,
+    rng: &mut StdRng,
+    q: &UnitQuaternion<f64>,
+) {
+    let n = s.omega.len();
+    s.t = t;
+    s.velocity = sensors.velocity([x[3], x[4], x[5]], rng);
+    s.rates = sensors.gyro([x[10], x[11], x[12]], rng);
+    // Linear interpolation in the per-step history of (Ω, Ω̇).
+    let last = history.len() / (2 * n) - 1;
+    let pos = delayed_step.clamp(0.0, last as f64);
+    let i0 = pos.floor() as usize;
+    let i1 = (i0 + 1).min(last);
+    let frac = pos - i0 as f64;
+    for i in 0..n {
+        let at = |row: usize, col: usize| history[row * 2 * n + col];
+        let w = at(i0, i) * (1.0 - frac) + at(i1, i) * frac;
+        s.omega[i] = sensors.rotor_speed(w);
+        s.omega_dot[i] = at(i0, n + i) * (1.0 - frac) + at(i1, n + i) * frac;
+    }
+    s.wrench = *wrench;
+    s.height = Some(-x[2]);
+    s.attitude = Some([q.w, q.i, q.j, q.k]);
+}

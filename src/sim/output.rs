@@ -1,0 +1,143 @@
+//! The CSV data contract of DESIGN.md, written compactly and atomically.
+//!
+//! Column order: `t,u,v,w,p,q,r,omega_1..omega_N`, then `fx,fy,fz,mx,my,mz` (unless the
+//! log is IMU-only), `omega_dot_1..omega_dot_N`, `ax,ay,az`, `height`, `qw,qx,qy,qz` when
+//! present. Numbers are rounded to [`SIGNIFICANT_DIGITS`] significant digits and printed
+//! in Rust's shortest round-trip form, so output is byte-for-byte reproducible.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::sample::SampleChunk;
+
+/// Significant digits of every number written.
+pub const SIGNIFICANT_DIGITS: usize = 6;
+
+/// A table of named columns of equal length.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LogTable {
+    /// (header name, values) in output order.
+    pub columns: Vec<(String, Vec<f64>)>,
+}
+
+impl LogTable {
+    /// The contract columns of `chunk`; the wrench columns only with `with_wrench`.
+    pub fn from_chunk(chunk: &SampleChunk, with_wrench: bool) -> Self {
+        let mut columns = vec![("t".to_string(), chunk.t.clone())];
+        for (name, v) in ["u", "v", "w"].iter().zip(&chunk.velocity) {
+            columns.push((name.to_string(), v.clone()));
+        }
+        for (name, v) in ["p", "q", "r"].iter().zip(&chunk.rates) {
+            columns.push((name.to_string(), v.clone()));
+        }
+        for (i, v) in chunk.omega.iter().enumerate() {
+            columns.push((format!("omega_{}", i + 1), v.clone()));
+        }
+        if with_wrench {
+            for (name, v) in ["fx", "fy", "fz", "mx", "my", "mz"]
+                .iter()
+                .zip(&chunk.wrench)
+            {
+                columns.push((name.to_string(), v.clone()));
+            }
+        }
+        for (i, v) in chunk.omega_dot.iter().enumerate() {
+            columns.push((format!("omega_dot_{}", i + 1), v.clone()));
+        }
+        let mut table = Self { columns };
+        if !chunk.height.is_empty() {
+            table.push("height", chunk.height.clone());
+        }
+        if !chunk.attitude[0].is_empty() {
+            for (name, v) in ["qw", "qx", "qy", "qz"].iter().zip(&chunk.attitude) {
+                table.push(name, v.clone());
+            }
+        }
+        table
+    }
+
+    /// Appends a column.
+    pub fn push(&mut self, name: &str, values: Vec<f64>) {
+        self.columns.push((name.to_string(), values));
+    }
+
+    /// Inserts a column before the column called `before` (at the end if absent).
+    pub fn insert_before(&mut self, before: &str, name: &str, values: Vec<f64>) {
+        let at = self
+            .columns
+            .iter()
+            .position(|(n, _)| n == before)
+            .unwrap_or(self.columns.len());
+        self.columns.insert(at, (name.to_string(), values));
+    }
+
+    /// Rows.
+    pub fn len(&self) -> usize {
+        self.columns.first().map_or(0, |c| c.1.len())
+    }
+
+    /// True without rows.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The CSV text.
+    pub fn to_csv_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.len() * self.columns.len() * 11);
+        let header: Vec<&str> = self.columns.iter().map(|(n, _)| n.as_str()).collect();
+        out.extend_from_slice(header.join(",").as_bytes());
+        out.push(b'\n');
+        for k in 0..self.len() {
+            for (j, (_, v)) in self.columns.iter().enumerate() {
+                if j > 0 {
+                    out.push(b',');
+                }
+                // Writing into a Vec cannot fail.
+                let _ = write!(out, "{}", round_significant(v[k]));
+            }
+            out.push(b'\n');
+        }
+        out
+    }
+
+    /// Writes the CSV to `path` atomically: a temporary file in the same directory,
+    /// flushed and renamed over `path`, so a failed run leaves no partial file.
+    pub fn write_csv(&self, path: &Path) -> Result<(), String> {
+        write_atomically(path, &self.to_csv_bytes())
+    }
+}
+
+/// `x` rounded to [`SIGNIFICANT_DIGITS`] significant digits (−0 becomes 0).
+pub fn round_significant(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return if x == 0.0 { 0.0 } else { x };
+    }
+    let s = format!("{:.*e}", SIGNIFICANT_DIGITS - 1, x);
+    s.parse().unwrap_or(x)
+}
+
+/// Writes `bytes` to `path` through a temporary sibling file and a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| format!("{}: not a file path", path.display()))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("{}: cannot write: {e}", path.display())
+    })
+}
