@@ -13,6 +13,7 @@
 #![warn(missing_docs)]
 
 pub mod airframe;
+pub mod io;
 pub mod mixing;
 pub mod model;
 pub mod rotor;
