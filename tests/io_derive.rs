@@ -232,11 +232,8 @@ fn layout_regression_recovers_positions_spins_and_rotor_inertia_exactly() {
     // Noiseless data: errors are rounding in the normal equations, 1e-6 relative.
     assert!((r.thrust_coefficient - k).abs() < 1e-6 * k);
     assert!((r.arm_length - 0.11).abs() < 1e-6);
-    for i in 0..4 {
-        assert!(
-            (r.positions[i][0] - pos[i][0]).abs() < 1e-6
-                && (r.positions[i][1] - pos[i][1]).abs() < 1e-6
-        );
+    for (got, want) in r.positions.iter().zip(pos) {
+        assert!((got[0] - want[0]).abs() < 1e-6 && (got[1] - want[1]).abs() < 1e-6);
     }
     assert!((r.rotor_inertia.unwrap() - jz).abs() < 1e-6 * jz * 100.0);
 }
