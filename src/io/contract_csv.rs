@@ -111,7 +111,7 @@ impl RowSource for CsvSource {
         &self.file
     }
 
-    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<Location>, IoError> {
+    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
         loop {
             let more = self
                 .reader
@@ -148,7 +148,7 @@ impl RowSource for CsvSource {
                     )
                 })?;
             }
-            return Ok(Some(loc));
+            return Ok(Some((loc, None)));
         }
     }
 }

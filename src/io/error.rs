@@ -61,6 +61,9 @@ pub enum ErrorKind {
     },
     /// Mapping or vehicle inconsistency (unit, rotor count, frame…).
     Mapping(String),
+    /// An asynchronous topic has no messages close enough to align with the time base;
+    /// the sample is always dropped and counted (never bridged).
+    NotAligned(String),
 }
 
 impl IoError {
@@ -84,6 +87,7 @@ impl IoError {
                 | ErrorKind::NotFinite(_)
                 | ErrorKind::OutOfRange { .. }
                 | ErrorKind::Time { .. }
+                | ErrorKind::NotAligned(_)
         )
     }
 
@@ -99,6 +103,7 @@ impl IoError {
             ErrorKind::OutOfRange { .. } => "out of physical range",
             ErrorKind::Time { .. } => "time not strictly increasing",
             ErrorKind::Mapping(_) => "mapping",
+            ErrorKind::NotAligned(_) => "topic not aligned within max_gap",
         }
     }
 }
@@ -150,7 +155,9 @@ impl fmt::Display for ErrorKind {
         match self {
             Self::Read(m) => write!(f, "cannot read: {m}"),
             Self::Empty => f.write_str("no data rows"),
-            Self::Format(m) | Self::MissingSignal(m) | Self::Mapping(m) => f.write_str(m),
+            Self::Format(m) | Self::MissingSignal(m) | Self::Mapping(m) | Self::NotAligned(m) => {
+                f.write_str(m)
+            }
             Self::NotANumber(text) => write!(f, "not a number ({text:?})"),
             Self::NotFinite(v) => write!(f, "not a finite number ({v})"),
             Self::OutOfRange { value, range } => {

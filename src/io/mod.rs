@@ -15,6 +15,8 @@ pub mod derive;
 pub mod error;
 pub mod layout;
 pub mod mapping;
+pub mod mcap_read;
+pub mod mcap_write;
 pub mod slots;
 pub mod units;
 pub mod validate;
@@ -119,9 +121,10 @@ pub trait RowSource {
     /// File name for messages.
     fn file(&self) -> &str;
     /// Fills `raw` with the next sample's raw values (source units and axes); returns its
-    /// location, `None` at end of file. After a sample-level error the source is ready
-    /// for the next sample.
-    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<Location>, IoError>;
+    /// location and, when the source supplies it outside the slots (MCAP log time, or
+    /// the aligned base time), its time in seconds; `None` at end of file. After a
+    /// sample-level error the source is ready for the next sample.
+    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError>;
 }
 
 /// One converted sample (SI, FRD/NED) inside the look-ahead window.
@@ -256,12 +259,26 @@ pub fn open_log(
     if is_mcap(path)
         .map_err(|e| IoError::new(&file, Location::File, None, ErrorKind::Read(e.to_string())))?
     {
-        let _ = mapping;
-        return Err(IoError::new(
+        let mapping = mapping.ok_or_else(|| {
+            IoError::new(
+                &file,
+                Location::File,
+                None,
+                ErrorKind::Mapping(
+                    "an MCAP log needs a mapping file naming topics and fields".into(),
+                ),
+            )
+        })?;
+        let (source, layout) =
+            mcap_read::McapSource::open(path, &file, mapping, rotors, opts.max_gap)?;
+        return Ok(LogReader::new(
+            Box::new(source),
+            layout,
+            mapping,
+            vehicle,
+            opts,
             &file,
-            Location::File,
-            None,
-            ErrorKind::Format("MCAP not supported yet".into()),
+            true,
         ));
     }
     let (source, resolved, layout) = contract_csv::CsvSource::open(path, &file, mapping, rotors)?;
@@ -417,7 +434,7 @@ impl LogReader {
 
     /// Reads, converts and checks the next sample; `Ok(None)` at end of file.
     fn pull(&mut self) -> Result<Option<Row>, IoError> {
-        let Some(loc) = self.source.next_row(&mut self.raw)? else {
+        let Some((loc, source_time)) = self.source.next_row(&mut self.raw)? else {
             return Ok(None);
         };
         self.summary.rows_read += 1;
@@ -449,6 +466,7 @@ impl LogReader {
         }
         let mut row = Row {
             loc,
+            t: source_time.unwrap_or(0.0),
             ..Row::default()
         };
         self.convert(&mut row)
@@ -537,7 +555,10 @@ impl LogReader {
     }
 
     fn drop_or_fail(&mut self, e: IoError) -> Result<(), IoError> {
-        if self.opts.invalid == InvalidSamples::DropAndCount && e.is_sample_level() {
+        let always_dropped = matches!(e.kind, ErrorKind::NotAligned(_));
+        if always_dropped
+            || (self.opts.invalid == InvalidSamples::DropAndCount && e.is_sample_level())
+        {
             self.count_drop(e.reason(), e.to_string());
             Ok(())
         } else {

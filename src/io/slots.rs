@@ -35,6 +35,9 @@ impl SlotLayout {
             let Some(map) = mapping.get(signal) else {
                 continue;
             };
+            if signal == Signal::Time && mcap {
+                continue; // the MCAP source supplies the (aligned) time itself
+            }
             let mapping_err = |m: String| {
                 IoError::new(
                     file,
