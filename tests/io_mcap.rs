@@ -34,21 +34,24 @@ fn read_all(
 }
 
 #[test]
-fn csv_to_mcap_json_to_samples_is_identical() {
+fn csv_to_mcap_json_and_cdr_to_samples_is_identical() {
     let vehicle = quad(3e-5);
     let src = analytic_chunk(2100, 250.0);
     let csv = tmp("rt.csv");
     write_contract_csv(&csv, [&src]).unwrap();
     let (from_csv, _, _) = read_all(&csv, None);
-    let mcap = tmp("rt.mcap");
-    write_samples(&mcap, &vehicle, [&from_csv], Encoding::Json).unwrap();
-    let mapping = written_mapping(4, true, true, true);
-    let (from_mcap, summary, segments) = read_all(&mcap, Some(&mapping));
-    // JSON numbers are written with shortest round-trip formatting: bit-identical.
-    assert_same(&from_mcap, &from_csv);
-    assert_same(&from_mcap, &src);
-    assert_eq!(summary.segments, 1);
-    assert_eq!(segments, vec![0, 0, 0]);
+    for encoding in [Encoding::Json, Encoding::Cdr] {
+        let mcap = tmp(&format!("rt-{encoding:?}.mcap"));
+        write_samples(&mcap, &vehicle, [&from_csv], encoding).unwrap();
+        let mapping = written_mapping(4, true, true, true);
+        let (from_mcap, summary, segments) = read_all(&mcap, Some(&mapping));
+        // JSON numbers use shortest round-trip formatting, CDR the raw IEEE bytes:
+        // bit-identical either way.
+        assert_same(&from_mcap, &from_csv);
+        assert_same(&from_mcap, &src);
+        assert_eq!(summary.segments, 1);
+        assert_eq!(segments, vec![0, 0, 0]);
+    }
 }
 
 /// Writes an MCAP file with an IMU topic at `imu_hz` and a rotor topic at `rotor_hz`
@@ -218,4 +221,177 @@ fn malformed_mcap_inputs_get_specific_errors() {
         e,
         "good.mcap: an MCAP log needs a mapping file naming topics and fields"
     );
+}
+
+/// Little-endian CDR writer for test messages of arbitrary primitive layout.
+struct Cdr(Vec<u8>);
+
+impl Cdr {
+    fn new() -> Self {
+        Cdr(vec![0, 1, 0, 0])
+    }
+    fn pad(&mut self, n: usize) {
+        while (self.0.len() - 4) % n != 0 {
+            self.0.push(0);
+        }
+    }
+    fn u8(&mut self, x: u8) {
+        self.0.push(x);
+    }
+    fn i32(&mut self, x: i32) {
+        self.pad(4);
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn u32(&mut self, x: u32) {
+        self.pad(4);
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn f32(&mut self, x: f32) {
+        self.pad(4);
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn u64(&mut self, x: u64) {
+        self.pad(8);
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn f64(&mut self, x: f64) {
+        self.pad(8);
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn string(&mut self, s: &str) {
+        self.u32(s.len() as u32 + 1);
+        self.0.extend_from_slice(s.as_bytes());
+        self.0.push(0);
+    }
+}
+
+const SEP: &str =
+    "================================================================================\n";
+
+/// sensor_msgs/Imu as ROS 2 stores it in MCAP (comments stripped).
+fn imu_schema() -> String {
+    format!(
+        "std_msgs/Header header\ngeometry_msgs/Quaternion orientation\nfloat64[9] orientation_covariance\n\
+         geometry_msgs/Vector3 angular_velocity\nfloat64[9] angular_velocity_covariance\n\
+         geometry_msgs/Vector3 linear_acceleration\nfloat64[9] linear_acceleration_covariance\n\
+         {SEP}MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n\
+         {SEP}MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n\
+         {SEP}MSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n\
+         {SEP}MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n"
+    )
+}
+
+/// px4_msgs/EscStatus with a fixed array of nested EscReport (abridged field list).
+fn esc_schema() -> String {
+    format!(
+        "uint64 timestamp\nuint8 CONNECTED_ESC_MAX = 8\nuint16 counter\nuint8 esc_count\n\
+         px4_msgs/EscReport[8] esc\n{SEP}MSG: px4_msgs/EscReport\nuint64 timestamp\nint32 esc_rpm\n\
+         float32 esc_voltage\nuint8 esc_state\n"
+    )
+}
+
+fn imu_message(ns: u64, gyro: [f64; 3], acc: [f64; 3]) -> Vec<u8> {
+    let mut c = Cdr::new();
+    c.i32((ns / 1_000_000_000) as i32);
+    c.u32((ns % 1_000_000_000) as u32);
+    c.string("base_link");
+    [0.0, 0.0, 0.0, 1.0].iter().for_each(|&x| c.f64(x));
+    (0..9).for_each(|_| c.f64(0.0));
+    gyro.iter().for_each(|&x| c.f64(x));
+    (0..9).for_each(|_| c.f64(0.0));
+    acc.iter().for_each(|&x| c.f64(x));
+    (0..9).for_each(|_| c.f64(0.0));
+    c.0
+}
+
+fn esc_message(ns: u64, rpm: [i32; 4]) -> Vec<u8> {
+    let mut c = Cdr::new();
+    c.u64(ns / 1000);
+    c.0.extend_from_slice(&7u16.to_le_bytes());
+    c.u8(4);
+    for i in 0..8 {
+        c.u64(ns / 1000);
+        c.i32(if i < 4 { rpm[i] } else { 0 });
+        c.f32(16.8);
+        c.u8(1);
+    }
+    c.0
+}
+
+#[test]
+fn ros2_cdr_imu_and_px4_esc_status_decode_from_their_schemas() {
+    use mcap::records::MessageHeader;
+    let path = tmp("ros2.mcap");
+    let mut w = mcap::Writer::new(std::io::BufWriter::new(
+        std::fs::File::create(&path).unwrap(),
+    ))
+    .unwrap();
+    let meta = BTreeMap::new();
+    let s1 = w
+        .add_schema("sensor_msgs/msg/Imu", "ros2msg", imu_schema().as_bytes())
+        .unwrap();
+    let s2 = w
+        .add_schema("px4_msgs/msg/EscStatus", "ros2msg", esc_schema().as_bytes())
+        .unwrap();
+    let imu = w.add_channel(s1, "/imu", "cdr", &meta).unwrap();
+    let esc = w.add_channel(s2, "/esc", "cdr", &meta).unwrap();
+    for k in 0..100u64 {
+        let ns = 1_000_000_000 + k * 10_000_000;
+        let gyro = [0.01 * k as f64, -0.5, 0.25];
+        let h = |c| MessageHeader {
+            channel_id: c,
+            sequence: k as u32,
+            log_time: ns,
+            publish_time: ns,
+        };
+        w.write_to_known_channel(&h(imu), &imu_message(ns, gyro, [0.1, 0.2, -9.7]))
+            .unwrap();
+        let rpm = [10000 + k as i32, 10100, 10200, 10300];
+        w.write_to_known_channel(&h(esc), &esc_message(ns, rpm))
+            .unwrap();
+    }
+    w.finish().unwrap();
+    let mapping = Mapping::from_toml_str(
+        r#"
+        [frames]
+        body = "flu"
+        [time]
+        fields = ["header.stamp"]
+        [mcap]
+        time_base = "/imu"
+        [mcap.topic_time."/esc"]
+        field = "timestamp"
+        unit = "us"
+        [signals.rates]
+        topic = "/imu"
+        fields = ["angular_velocity.x", "angular_velocity.y", "angular_velocity.z"]
+        [signals.specific_force]
+        topic = "/imu"
+        fields = ["linear_acceleration.x", "linear_acceleration.y", "linear_acceleration.z"]
+        [signals.velocity_body]
+        topic = "/imu"
+        fields = ["orientation.x", "orientation.y", "orientation.z"]
+        [signals.rotor_speeds]
+        topic = "/esc"
+        fields = ["esc[0].esc_rpm", "esc[1].esc_rpm", "esc[2].esc_rpm", "esc[3].esc_rpm"]
+        unit = "erpm"
+        pole_pairs = 7
+        "#,
+        "ros2.toml",
+    )
+    .unwrap();
+    let (c, s, _) = read_all(&path, Some(&mapping));
+    // The ESC time (µs · 1e-6) and the IMU stamp (sec + nanosec · 1e-9) of the same
+    // instant may differ in the last bit; when the ESC one is earlier, the final IMU
+    // sample has no later ESC message to interpolate to and is dropped (not bridged).
+    assert!(c.len() >= 99 && c.len() + s.dropped.values().sum::<u64>() as usize == 100);
+    // Header stamp 1 s + k·10 ms; FLU → FRD flips y and z of rates and specific force.
+    assert_eq!(c.t[3], 1.0 + 30_000_000.0 * 1e-9);
+    assert_eq!(c.rates[0][3], 0.03);
+    assert_eq!(c.rates[1][3], 0.5);
+    assert_eq!(c.rates[2][3], -0.25);
+    assert_eq!(c.wrench[2][3], 1.2 * 9.7);
+    // 10003 eRPM with 7 pole pairs = 10003/7 RPM; 1 ulp-level tolerance (1e-9 rad/s).
+    let want = 10003.0 * (std::f64::consts::PI / 30.0 / 7.0);
+    assert!((c.omega[0][3] - want).abs() < 1e-9);
 }

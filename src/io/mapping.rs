@@ -178,6 +178,19 @@ pub struct Signals {
 pub struct McapOptions {
     /// Topic whose message times form the common time base (default: the rates topic).
     pub time_base: Option<String>,
+    /// Per-topic time field overriding `[time]` (e.g. px4 `timestamp` in µs), by topic.
+    #[serde(default)]
+    pub topic_time: std::collections::BTreeMap<String, TopicTime>,
+}
+
+/// The time field of one topic's messages.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TopicTime {
+    /// Field path of the time (a number, or a ROS time `{sec, nanosec}`).
+    pub field: String,
+    /// Unit of a numeric time field (default s).
+    pub unit: Option<String>,
 }
 
 /// A parsed mapping file.

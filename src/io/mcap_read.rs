@@ -71,8 +71,21 @@ fn as_number(v: &Value) -> Option<f64> {
     Some(sec + ns * 1e-9)
 }
 
+/// How a topic's messages are decoded.
+enum Decoder {
+    /// Not known yet (no channel record seen).
+    Unknown,
+    /// JSON text.
+    Json,
+    /// ROS 2 CDR with its parsed schema.
+    Cdr(Box<super::ros2msg::Schema>),
+}
+
 /// A mapped topic and its messages waiting for alignment.
 struct Topic {
+    decoder: Decoder,
+    /// Time field and its factor to seconds; message log time when `None`.
+    time: Option<(Vec<Step>, f64)>,
     name: String,
     /// (slot, path) of every mapped field of this topic.
     fields: Vec<(usize, String, Vec<Step>)>,
@@ -87,9 +100,10 @@ pub struct McapSource {
     handle: File,
     reader: LinearReader,
     channel_topic: HashMap<u16, Option<usize>>,
+    /// Schemas by id: (name, encoding, text).
+    schemas: HashMap<u16, (String, String, Vec<u8>)>,
     topics: Vec<Topic>,
     base: usize,
-    time_field: Option<(Vec<Step>, f64)>,
     max_gap: f64,
     message_index: u64,
     latest_time: f64,
@@ -125,6 +139,8 @@ impl McapSource {
                 Some(i) => i,
                 None => {
                     topics.push(Topic {
+                        decoder: Decoder::Unknown,
+                        time: None,
                         name: name.clone(),
                         fields: Vec::new(),
                         queue: VecDeque::new(),
@@ -166,14 +182,39 @@ impl McapSource {
             }
             _ => None,
         };
+        for topic in &mut topics {
+            topic.time = match mapping.mcap.topic_time.get(&topic.name) {
+                Some(tt) => {
+                    let bad = |m: String| {
+                        IoError::new(
+                            file,
+                            Location::File,
+                            super::error::key(&format!("mcap.topic_time.{}", topic.name)),
+                            ErrorKind::Mapping(m),
+                        )
+                    };
+                    let steps = parse_path(&tt.field).map_err(bad)?;
+                    let factor = match &tt.unit {
+                        Some(u) => {
+                            super::units::unit_for(u, None, super::units::Dimension::Time, "time")
+                                .map_err(bad)?
+                                .to_si
+                        }
+                        None => 1.0,
+                    };
+                    Some((steps, factor))
+                }
+                None => time_field.clone(),
+            };
+        }
         let source = Self {
             file: file.to_string(),
             handle,
             reader: LinearReader::new(),
             channel_topic: HashMap::new(),
+            schemas: HashMap::new(),
             topics,
             base,
-            time_field,
             max_gap,
             message_index: 0,
             latest_time: f64::NEG_INFINITY,
@@ -224,19 +265,15 @@ impl McapSource {
                 )
             })?;
             match record {
+                Record::Schema { header, data } => {
+                    self.schemas
+                        .insert(header.id, (header.name, header.encoding, data.into_owned()));
+                }
                 Record::Channel(ch) => {
                     let topic = self.topics.iter().position(|t| t.name == ch.topic);
                     if let Some(t) = topic {
-                        if ch.message_encoding != "json" {
-                            return Err(self.err(
-                                Location::File,
-                                field(&ch.topic),
-                                ErrorKind::Format(format!(
-                                    "message encoding {:?} is not supported (supported: \"json\")",
-                                    ch.message_encoding
-                                )),
-                            ));
-                        }
+                        let decoder = self.decoder_for(&ch)?;
+                        self.topics[t].decoder = decoder;
                         self.topics[t].seen = true;
                     }
                     self.channel_topic.insert(ch.id, topic);
@@ -266,6 +303,34 @@ impl McapSource {
         }
     }
 
+    fn decoder_for(&self, ch: &mcap::records::Channel) -> Result<Decoder, IoError> {
+        let fail = |m: String| self.err(Location::File, field(&ch.topic), ErrorKind::Format(m));
+        match ch.message_encoding.as_str() {
+            "json" => Ok(Decoder::Json),
+            "cdr" => {
+                let (name, encoding, text) = self.schemas.get(&ch.schema_id).ok_or_else(|| {
+                    fail(format!(
+                        "CDR channel without schema (schema id {})",
+                        ch.schema_id
+                    ))
+                })?;
+                if encoding != "ros2msg" {
+                    return Err(fail(format!(
+                        "CDR schema encoding {encoding:?} is not supported (supported: \"ros2msg\")"
+                    )));
+                }
+                let text = std::str::from_utf8(text)
+                    .map_err(|_| fail("schema text is not UTF-8".into()))?;
+                let schema = super::ros2msg::parse_schema(name, text)
+                    .map_err(|m| fail(format!("schema {name}: {m}")))?;
+                Ok(Decoder::Cdr(Box::new(schema)))
+            }
+            other => Err(fail(format!(
+                "message encoding {other:?} is not supported (supported: \"json\", \"cdr\")"
+            ))),
+        }
+    }
+
     fn decode(
         &mut self,
         topic: usize,
@@ -275,14 +340,23 @@ impl McapSource {
     ) -> Result<(), IoError> {
         let loc = Location::Record(index);
         let name = self.topics[topic].name.clone();
-        let value: Value = serde_json::from_slice(data).map_err(|e| {
-            self.err(
-                loc,
-                field(&name),
-                ErrorKind::Format(format!("invalid JSON: {e}")),
-            )
-        })?;
-        let t = match &self.time_field {
+        let value: Value = match &self.topics[topic].decoder {
+            Decoder::Cdr(schema) => super::cdr::decode(schema, data).map_err(|m| {
+                self.err(
+                    loc,
+                    field(&name),
+                    ErrorKind::Format(format!("invalid CDR: {m}")),
+                )
+            })?,
+            _ => serde_json::from_slice(data).map_err(|e| {
+                self.err(
+                    loc,
+                    field(&name),
+                    ErrorKind::Format(format!("invalid JSON: {e}")),
+                )
+            })?,
+        };
+        let t = match &self.topics[topic].time {
             Some((steps, factor)) => {
                 let v = lookup(&value, steps).and_then(as_number).ok_or_else(|| {
                     self.err(

@@ -10,6 +10,7 @@
 //! M = I ω̇ + ω × I ω derived when not logged → chunks of at most
 //! [`crate::CHUNK_SAMPLES`] samples, each inside one segment.
 
+pub mod cdr;
 pub mod contract_csv;
 pub mod derive;
 pub mod error;
@@ -17,6 +18,7 @@ pub mod layout;
 pub mod mapping;
 pub mod mcap_read;
 pub mod mcap_write;
+pub mod ros2msg;
 pub mod slots;
 pub mod units;
 pub mod validate;
