@@ -231,7 +231,7 @@ impl Cdr {
         Cdr(vec![0, 1, 0, 0])
     }
     fn pad(&mut self, n: usize) {
-        while (self.0.len() - 4) % n != 0 {
+        while !(self.0.len() - 4).is_multiple_of(n) {
             self.0.push(0);
         }
     }
@@ -311,7 +311,7 @@ fn esc_message(ns: u64, rpm: [i32; 4]) -> Vec<u8> {
     c.u8(4);
     for i in 0..8 {
         c.u64(ns / 1000);
-        c.i32(if i < 4 { rpm[i] } else { 0 });
+        c.i32(rpm.get(i).copied().unwrap_or(0));
         c.f32(16.8);
         c.u8(1);
     }
