@@ -198,6 +198,15 @@ fn malformed_mcap_inputs_get_specific_errors() {
     let e = first_error(&cut, &async_mapping());
     assert!(e.starts_with("cut.mcap: message "), "{e}");
     assert!(e.contains("MCAP"), "{e}");
+    // Regression (found by tests/io_fuzz.rs, aborted with a 5.8e17-byte allocation): a
+    // corrupt record length is refused, not allocated. Header record opcode at byte 8,
+    // its u64 length at bytes 9..17.
+    let mut huge = bytes.clone();
+    huge[9..17].copy_from_slice(&(u64::MAX / 32).to_le_bytes());
+    let huge_path = tmp("huge.mcap");
+    std::fs::write(&huge_path, &huge).unwrap();
+    let e = first_error(&huge_path, &async_mapping());
+    assert!(e.starts_with("huge.mcap: message 0: MCAP: "), "{e}");
     // A mapped topic absent from the file.
     let mut m = async_mapping();
     m.signals.rotor_speeds.as_mut().unwrap().topic = Some("/motors".into());

@@ -19,6 +19,10 @@ use super::error::{ErrorKind, IoError, Location, field};
 use super::mapping::{Mapping, Signal};
 use super::slots::SlotLayout;
 
+/// Largest MCAP record (or chunk) accepted, bytes: a corrupt length field is an error,
+/// not an allocation of that size.
+pub const MAX_RECORD_BYTES: usize = 256 << 20;
+
 /// One step of a field path: `key` or `[index]`.
 #[derive(Debug, Clone, PartialEq)]
 enum Step {
@@ -210,7 +214,10 @@ impl McapSource {
         let source = Self {
             file: file.to_string(),
             handle,
-            reader: LinearReader::new(),
+            reader: LinearReader::new_with_options(
+                mcap::sans_io::linear_reader::LinearReaderOptions::default()
+                    .with_record_length_limit(MAX_RECORD_BYTES),
+            ),
             channel_topic: HashMap::new(),
             schemas: HashMap::new(),
             topics,
