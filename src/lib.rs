@@ -20,6 +20,7 @@ pub mod airframe;
 pub mod diagnose;
 pub mod estimate;
 pub mod identified;
+pub mod io;
 pub mod mixing;
 pub mod model;
 pub mod report;

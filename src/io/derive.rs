@@ -1,0 +1,286 @@
+//! Signals derived when a log lacks them: the local-polynomial (Savitzky–Golay)
+//! derivative on possibly non-uniform time stamps, the rigid-body force F = m a and moment
+//! M = I ω̇ + ω × I ω (Euler's equation), the IMU lever-arm correction, and body velocity
+//! from world velocity and attitude.
+
+use serde::Deserialize;
+
+use crate::airframe::cross;
+
+/// Options of the derivations.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeriveOptions {
+    /// Savitzky–Golay window length, samples (odd, ≥ order + 2).
+    #[serde(default = "default_window")]
+    pub sg_window: usize,
+    /// Savitzky–Golay polynomial order (1..=5).
+    #[serde(default = "default_order")]
+    pub sg_order: usize,
+    /// IMU position relative to the CG in body FRD axes, m; the accelerometer reading is
+    /// carried to the CG with a_cg = a_imu − ω̇ × r − ω × (ω × r).
+    pub imu_lever_arm: Option<[f64; 3]>,
+}
+
+fn default_window() -> usize {
+    11
+}
+
+fn default_order() -> usize {
+    2
+}
+
+impl Default for DeriveOptions {
+    fn default() -> Self {
+        Self {
+            sg_window: default_window(),
+            sg_order: default_order(),
+            imu_lever_arm: None,
+        }
+    }
+}
+
+impl DeriveOptions {
+    /// Checks window and order; the message names the offending option.
+    pub fn check(&self) -> Result<(), String> {
+        if !(1..=5).contains(&self.sg_order) {
+            return Err(format!("sg_order = {} must be in 1..=5", self.sg_order));
+        }
+        if self.sg_window.is_multiple_of(2)
+            || self.sg_window < self.sg_order + 2
+            || self.sg_window > 201
+        {
+            return Err(format!(
+                "sg_window = {} must be odd, at least sg_order + 2 = {} and at most 201",
+                self.sg_window,
+                self.sg_order + 2
+            ));
+        }
+        if let Some(r) = self.imu_lever_arm
+            && r.iter().any(|c| !c.is_finite() || c.abs() > 10.0)
+        {
+            return Err(format!(
+                "imu_lever_arm = {r:?} must be finite and within 10 m"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Weights `w` such that Σ_j w_j x(t_j) is the derivative at `t_k` of the least-squares
+/// polynomial of degree `order` through the samples at `times` (Savitzky–Golay on
+/// non-uniform stamps). `k` indexes `times`. Near the ends of a segment the window is
+/// one-sided. Returns `false` (weights untouched) when the fit is singular, i.e. fewer
+/// distinct times than `order + 1`.
+pub fn sg_derivative_weights(times: &[f64], k: usize, order: usize, w: &mut Vec<f64>) -> bool {
+    let n = order + 1;
+    if times.len() < n {
+        return false;
+    }
+    let t0 = times[k];
+    let span = times.iter().map(|t| (t - t0).abs()).fold(0.0, f64::max);
+    if span <= 0.0 {
+        return false;
+    }
+    // Normal equations in scaled time s = (t − t0)/span for conditioning.
+    let mut a = [[0.0; 6]; 6];
+    for &t in times {
+        let s = (t - t0) / span;
+        let mut pi = 1.0;
+        let mut pow = [0.0; 11];
+        for p in pow.iter_mut().take(2 * n - 1) {
+            *p = pi;
+            pi *= s;
+        }
+        for (r, row) in a.iter_mut().enumerate().take(n) {
+            for (c, v) in row.iter_mut().enumerate().take(n) {
+                *v += pow[r + c];
+            }
+        }
+    }
+    // Solve A g = e_1 (derivative of the fitted polynomial at s = 0 is coefficient 1).
+    let mut g = [0.0; 6];
+    g[1] = 1.0;
+    if !solve_spd(&mut a, &mut g, n) {
+        return false;
+    }
+    w.clear();
+    for &t in times {
+        let s = (t - t0) / span;
+        let mut pi = 1.0;
+        let mut acc = 0.0;
+        for gi in g.iter().take(n) {
+            acc += gi * pi;
+            pi *= s;
+        }
+        w.push(acc / span);
+    }
+    true
+}
+
+/// Gaussian elimination with partial pivoting on the leading `n`×`n` block; false when
+/// singular.
+fn solve_spd(a: &mut [[f64; 6]; 6], b: &mut [f64; 6], n: usize) -> bool {
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
+            .unwrap_or(col);
+        if a[piv][col].abs() < 1e-13 * a[0][0].abs().max(1e-300) {
+            return false;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for r in col + 1..n {
+            let f = a[r][col] / a[col][col];
+            let pivot_row = a[col];
+            for (dst, src) in a[r][col..n].iter_mut().zip(&pivot_row[col..n]) {
+                *dst -= f * src;
+            }
+            b[r] -= f * b[col];
+        }
+    }
+    for col in (0..n).rev() {
+        let mut s = b[col];
+        for c in col + 1..n {
+            s -= a[col][c] * b[c];
+        }
+        b[col] = s / a[col][col];
+    }
+    true
+}
+
+/// I · v for a 3×3 inertia matrix.
+pub fn mat_vec(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2])
+}
+
+/// Moment on the rigid body from Euler's equation, M = I ω̇ + ω × I ω (N m), for
+/// inertia `inertia` (kg m²), rates `omega` (rad/s) and angular acceleration `omega_dot`
+/// (rad/s²), body axes.
+pub fn euler_moment(inertia: &[[f64; 3]; 3], omega: [f64; 3], omega_dot: [f64; 3]) -> [f64; 3] {
+    let i_wd = mat_vec(inertia, omega_dot);
+    let gyro = cross(omega, mat_vec(inertia, omega));
+    [0, 1, 2].map(|k| i_wd[k] + gyro[k])
+}
+
+/// Specific force at the CG from an accelerometer at `lever` (m, body) from the CG:
+/// a_cg = a_imu − ω̇ × r − ω × (ω × r).
+pub fn specific_force_at_cg(
+    a_imu: [f64; 3],
+    lever: [f64; 3],
+    omega: [f64; 3],
+    omega_dot: [f64; 3],
+) -> [f64; 3] {
+    let tangential = cross(omega_dot, lever);
+    let centripetal = cross(omega, cross(omega, lever));
+    [0, 1, 2].map(|k| a_imu[k] - tangential[k] - centripetal[k])
+}
+
+/// Rotation matrix of a unit quaternion `[w, x, y, z]` (body → world).
+pub fn quat_to_matrix(q: [f64; 4]) -> [[f64; 3]; 3] {
+    let [w, x, y, z] = q;
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+/// Unit quaternion `[w, x, y, z]` with w ≥ 0 of a rotation matrix (Shepperd's method).
+pub fn matrix_to_quat(m: &[[f64; 3]; 3]) -> [f64; 4] {
+    let tr = m[0][0] + m[1][1] + m[2][2];
+    let q = if tr > 0.0 {
+        let s = 2.0 * (1.0 + tr).sqrt();
+        [
+            s / 4.0,
+            (m[2][1] - m[1][2]) / s,
+            (m[0][2] - m[2][0]) / s,
+            (m[1][0] - m[0][1]) / s,
+        ]
+    } else if m[0][0] > m[1][1] && m[0][0] > m[2][2] {
+        let s = 2.0 * (1.0 + m[0][0] - m[1][1] - m[2][2]).sqrt();
+        [
+            (m[2][1] - m[1][2]) / s,
+            s / 4.0,
+            (m[0][1] + m[1][0]) / s,
+            (m[0][2] + m[2][0]) / s,
+        ]
+    } else if m[1][1] > m[2][2] {
+        let s = 2.0 * (1.0 + m[1][1] - m[0][0] - m[2][2]).sqrt();
+        [
+            (m[0][2] - m[2][0]) / s,
+            (m[0][1] + m[1][0]) / s,
+            s / 4.0,
+            (m[1][2] + m[2][1]) / s,
+        ]
+    } else {
+        let s = 2.0 * (1.0 + m[2][2] - m[0][0] - m[1][1]).sqrt();
+        [
+            (m[1][0] - m[0][1]) / s,
+            (m[0][2] + m[2][0]) / s,
+            (m[1][2] + m[2][1]) / s,
+            s / 4.0,
+        ]
+    };
+    if q[0] < 0.0 { q.map(|c| -c) } else { q }
+}
+
+/// Body-axes velocity from world-axes velocity `v_world` and the body→world attitude `q`:
+/// v_body = Rᵀ v_world.
+pub fn body_velocity(q: [f64; 4], v_world: [f64; 3]) -> [f64; 3] {
+    let r = quat_to_matrix(q);
+    [0, 1, 2].map(|c| r[0][c] * v_world[0] + r[1][c] * v_world[1] + r[2][c] * v_world[2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sg_is_exact_on_polynomials_of_its_order_even_non_uniform() {
+        // Degree-2 polynomial, order-2 fit on jittered stamps: exact up to rounding
+        // (tolerance 1e-9 covers the conditioning of an 11-point fit).
+        let times: Vec<f64> = (0..11)
+            .map(|j| 0.01 * j as f64 + 0.002 * ((j * 7 % 5) as f64))
+            .collect();
+        let x: Vec<f64> = times.iter().map(|t| 3.0 - 2.0 * t + 5.0 * t * t).collect();
+        let mut w = Vec::new();
+        for k in [0, 5, 10] {
+            assert!(sg_derivative_weights(&times, k, 2, &mut w));
+            let d: f64 = w.iter().zip(&x).map(|(a, b)| a * b).sum();
+            assert!((d - (-2.0 + 10.0 * times[k])).abs() < 1e-9, "k={k}: {d}");
+        }
+    }
+
+    #[test]
+    fn euler_moment_matches_hand_computation() {
+        // I = diag(1,2,3), ω = (1,0,1), ω̇ = 0: ω × Iω = (1,0,1) × (1,0,3) = (0,-2,0).
+        let i = [[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]];
+        assert_eq!(
+            euler_moment(&i, [1.0, 0.0, 1.0], [0.0; 3]),
+            [0.0, -2.0, 0.0]
+        );
+    }
+
+    #[test]
+    fn quaternion_matrix_round_trip() {
+        let n = (0.3f64 * 0.3 + 0.1 * 0.1 + 0.5 * 0.5 + 0.8 * 0.8).sqrt();
+        let q = [0.8 / n, 0.3 / n, -0.1 / n, 0.5 / n];
+        let back = matrix_to_quat(&quat_to_matrix(q));
+        for k in 0..4 {
+            assert!((back[k] - q[k]).abs() < 1e-15 * 4.0, "{back:?} vs {q:?}");
+        }
+    }
+}

@@ -1,0 +1,208 @@
+//! Motor-layout inference from data: regress the body moments on the individual rotor
+//! "thrust proxies" Ω_i² (and M_z also on Ω̇_i), and read positions, spins and the arm
+//! length off the coefficients.
+//!
+//! With thrust T_i = k Ω_i² along −z at hub (x_i, y_i) (FRD): M_x = −Σ y_i k Ω_i²,
+//! M_y = Σ x_i k Ω_i², F_z = −k Σ Ω_i², and the reaction torque M_z = −Σ σ_i (k_Q Ω_i² +
+//! J_z Ω̇_i) (seed Eq. 16 sign convention, as in `airframe::closed_form_wrench`). So
+//! x_i = b_i / k, y_i = −a_i / k, σ_i = −sign(c_i) and J_z ≈ −σ_i d_i.
+
+use serde::Serialize;
+
+/// Running normal equations of a small least-squares problem y ≈ X β.
+#[derive(Debug, Clone)]
+pub struct NormalEquations {
+    n: usize,
+    xtx: Vec<f64>,
+    xty: Vec<f64>,
+    yty: f64,
+    sum_y: f64,
+    count: u64,
+}
+
+impl NormalEquations {
+    /// Empty accumulator for `n` regressors.
+    pub fn new(n: usize) -> Self {
+        Self {
+            n,
+            xtx: vec![0.0; n * n],
+            xty: vec![0.0; n],
+            yty: 0.0,
+            sum_y: 0.0,
+            count: 0,
+        }
+    }
+
+    /// Adds one observation.
+    pub fn push(&mut self, x: &[f64], y: f64) {
+        for r in 0..self.n {
+            for c in r..self.n {
+                self.xtx[r * self.n + c] += x[r] * x[c];
+            }
+            self.xty[r] += x[r] * y;
+        }
+        self.yty += y * y;
+        self.sum_y += y;
+        self.count += 1;
+    }
+
+    /// Least-squares coefficients (columns equilibrated) and R² about the mean; `None`
+    /// when singular or empty.
+    pub fn solve(&self) -> Option<(Vec<f64>, f64)> {
+        let n = self.n;
+        if self.count <= n as u64 {
+            return None;
+        }
+        let scale: Vec<f64> = (0..n)
+            .map(|i| self.xtx[i * n + i].sqrt().max(1e-300))
+            .collect();
+        let mut a = vec![0.0; n * n];
+        for r in 0..n {
+            for c in 0..n {
+                let v = if c >= r {
+                    self.xtx[r * n + c]
+                } else {
+                    self.xtx[c * n + r]
+                };
+                a[r * n + c] = v / (scale[r] * scale[c]);
+            }
+        }
+        let mut b: Vec<f64> = (0..n).map(|i| self.xty[i] / scale[i]).collect();
+        // Cholesky solve of the equilibrated system.
+        for j in 0..n {
+            let mut d = a[j * n + j];
+            for k in 0..j {
+                d -= a[j * n + k] * a[j * n + k];
+            }
+            if d <= 1e-12 {
+                return None;
+            }
+            let d = d.sqrt();
+            a[j * n + j] = d;
+            for i in j + 1..n {
+                let mut s = a[i * n + j];
+                for k in 0..j {
+                    s -= a[i * n + k] * a[j * n + k];
+                }
+                a[i * n + j] = s / d;
+            }
+        }
+        for i in 0..n {
+            let mut s = b[i];
+            for k in 0..i {
+                s -= a[i * n + k] * b[k];
+            }
+            b[i] = s / a[i * n + i];
+        }
+        for i in (0..n).rev() {
+            let mut s = b[i];
+            for k in i + 1..n {
+                s -= a[k * n + i] * b[k];
+            }
+            b[i] = s / a[i * n + i];
+        }
+        let beta: Vec<f64> = (0..n).map(|i| b[i] / scale[i]).collect();
+        let explained: f64 = beta.iter().zip(&self.xty).map(|(b, xy)| b * xy).sum();
+        let sse = (self.yty - explained).max(0.0);
+        let mean = self.sum_y / self.count as f64;
+        let sst = self.yty - self.count as f64 * mean * mean;
+        let r2 = if sst > 0.0 { 1.0 - sse / sst } else { 0.0 };
+        Some((beta, r2))
+    }
+}
+
+/// What the data say about the motor layout.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LayoutReport {
+    /// Samples used.
+    pub samples: u64,
+    /// Thrust coefficient k from F_z = −k Σ Ω_i², N s².
+    pub thrust_coefficient: f64,
+    /// Inferred hub position (x_i, y_i) per rotor, body FRD, m.
+    pub positions: Vec<[f64; 2]>,
+    /// Inferred spin σ_i (+1: angular velocity along body +z).
+    pub spins: Vec<f64>,
+    /// Mean inferred arm length, m.
+    pub arm_length: f64,
+    /// Rotor inertia estimate from the Ω̇ terms of M_z, kg m², when Ω̇ is available.
+    pub rotor_inertia: Option<f64>,
+    /// R² of the M_x, M_y, M_z and F_z regressions.
+    pub r_squared: [f64; 4],
+}
+
+/// Streaming accumulator of the layout regressions.
+#[derive(Debug, Clone)]
+pub struct LayoutAccumulator {
+    rotors: usize,
+    with_omega_dot: bool,
+    mx: NormalEquations,
+    my: NormalEquations,
+    mz: NormalEquations,
+    fz: NormalEquations,
+    x: Vec<f64>,
+}
+
+impl LayoutAccumulator {
+    /// Accumulator for `rotors` rotors; `with_omega_dot` adds the Ω̇_i terms to M_z.
+    pub fn new(rotors: usize, with_omega_dot: bool) -> Self {
+        let nz = 1 + rotors + if with_omega_dot { rotors } else { 0 };
+        Self {
+            rotors,
+            with_omega_dot,
+            mx: NormalEquations::new(rotors + 1),
+            my: NormalEquations::new(rotors + 1),
+            mz: NormalEquations::new(nz),
+            fz: NormalEquations::new(1),
+            x: vec![0.0; nz],
+        }
+    }
+
+    /// Adds one sample: rotor speeds (rad/s), rotor accelerations (rad/s², ignored
+    /// unless enabled) and wrench [F; M] (N, N m).
+    pub fn push(&mut self, omega: &[f64], omega_dot: &[f64], wrench: &[f64; 6]) {
+        let n = self.rotors;
+        self.x[0] = 1.0;
+        let mut sum_sq = 0.0;
+        for (dst, w) in self.x[1..=n].iter_mut().zip(omega) {
+            *dst = w * w;
+            sum_sq += *dst;
+        }
+        self.mx.push(&self.x[..=n], wrench[3]);
+        self.my.push(&self.x[..=n], wrench[4]);
+        if self.with_omega_dot {
+            self.x[1 + n..1 + 2 * n].copy_from_slice(&omega_dot[..n]);
+        }
+        self.mz.push(&self.x, wrench[5]);
+        self.fz.push(&[sum_sq], wrench[2]);
+    }
+
+    /// The inferred layout, `None` when a regression is singular (e.g. constant speeds).
+    pub fn finish(&self) -> Option<LayoutReport> {
+        let n = self.rotors;
+        let (kfz, r2f) = self.fz.solve()?;
+        let k = -kfz[0];
+        if k <= 0.0 {
+            return None;
+        }
+        let (a, r2x) = self.mx.solve()?;
+        let (b, r2y) = self.my.solve()?;
+        let (c, r2z) = self.mz.solve()?;
+        let positions: Vec<[f64; 2]> = (0..n).map(|i| [b[1 + i] / k, -a[1 + i] / k]).collect();
+        let spins: Vec<f64> = (0..n)
+            .map(|i| if c[1 + i] > 0.0 { -1.0 } else { 1.0 })
+            .collect();
+        let arm_length = positions.iter().map(|p| p[0].hypot(p[1])).sum::<f64>() / n as f64;
+        let rotor_inertia = self
+            .with_omega_dot
+            .then(|| (0..n).map(|i| -spins[i] * c[1 + n + i]).sum::<f64>() / n as f64);
+        Some(LayoutReport {
+            samples: self.fz.count,
+            thrust_coefficient: k,
+            positions,
+            spins,
+            arm_length,
+            rotor_inertia,
+            r_squared: [r2x, r2y, r2z, r2f],
+        })
+    }
+}

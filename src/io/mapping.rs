@@ -1,0 +1,522 @@
+//! The mapping file (TOML): which column (CSV) or topic and field (MCAP) holds each
+//! signal, its unit, the log's body and world axis conventions and the rotor numbering.
+//!
+//! ```toml
+//! [frames]
+//! body = "flu"          # frd | flu
+//! world = "nwu"         # ned | enu | nwu (z-up, x forward)
+//! [time]
+//! columns = ["t"]
+//! unit = "s"
+//! [signals.rates]
+//! columns = ["ang vel x", "ang vel y", "ang vel z"]
+//! unit = "rad/s"
+//! [signals.rotor_speeds]          # listed in vehicle rotor order 1..N
+//! columns = ["mot 1", "mot 2", "mot 3", "mot 4"]
+//! unit = "rad/s"
+//! ```
+//!
+//! Without a mapping file the DESIGN.md contract header is mapped by [`contract_mapping`].
+
+use std::collections::HashSet;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use super::derive::DeriveOptions;
+use super::error::{ErrorKind, IoError, Location, display_name, key};
+use super::units::{Dimension, unit_for};
+
+/// Body axis convention of a log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum BodyFrame {
+    /// Front-right-down (the product's convention).
+    #[default]
+    Frd,
+    /// Front-left-up: y and z flip to reach FRD.
+    Flu,
+}
+
+/// World axis convention of a log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum WorldFrame {
+    /// North-east-down (the product's convention).
+    #[default]
+    Ned,
+    /// East-north-up: x and y swap, z flips.
+    Enu,
+    /// x forward/north, y left/west, z up: y and z flip.
+    Nwu,
+}
+
+/// A proper rotation that only permutes and flips axes, so conversion is exact:
+/// `out[k] = sign[k] * in[perm[k]]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisMap {
+    /// Source component of each output component.
+    pub perm: [usize; 3],
+    /// Sign of each output component.
+    pub sign: [f64; 3],
+}
+
+impl AxisMap {
+    /// Applies the map to a vector.
+    pub fn apply(&self, v: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|k| self.sign[k] * v[self.perm[k]])
+    }
+
+    /// The rotation matrix (row k has `sign[k]` in column `perm[k]`).
+    pub fn matrix(&self) -> [[f64; 3]; 3] {
+        let mut m = [[0.0; 3]; 3];
+        for k in 0..3 {
+            m[k][self.perm[k]] = self.sign[k];
+        }
+        m
+    }
+}
+
+impl BodyFrame {
+    /// Map from this frame's components to FRD components.
+    pub fn to_frd(self) -> AxisMap {
+        match self {
+            Self::Frd => AxisMap {
+                perm: [0, 1, 2],
+                sign: [1.0, 1.0, 1.0],
+            },
+            Self::Flu => AxisMap {
+                perm: [0, 1, 2],
+                sign: [1.0, -1.0, -1.0],
+            },
+        }
+    }
+}
+
+impl WorldFrame {
+    /// Map from this frame's components to NED components.
+    pub fn to_ned(self) -> AxisMap {
+        match self {
+            Self::Ned => AxisMap {
+                perm: [0, 1, 2],
+                sign: [1.0, 1.0, 1.0],
+            },
+            Self::Enu => AxisMap {
+                perm: [1, 0, 2],
+                sign: [1.0, 1.0, -1.0],
+            },
+            Self::Nwu => AxisMap {
+                perm: [0, 1, 2],
+                sign: [1.0, -1.0, -1.0],
+            },
+        }
+    }
+}
+
+/// Axis conventions of the log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Frames {
+    /// Body axes of every body vector in the log.
+    #[serde(default)]
+    pub body: BodyFrame,
+    /// World axes of world vectors and of the attitude quaternion (body→world).
+    #[serde(default)]
+    pub world: WorldFrame,
+}
+
+/// Where one signal is in the log.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SignalMap {
+    /// CSV column names, one per component, in component order.
+    #[serde(default)]
+    pub columns: Vec<String>,
+    /// MCAP topic holding the signal.
+    pub topic: Option<String>,
+    /// MCAP field paths inside the message (`angular_velocity.x`, `esc[0].rpm`), one per
+    /// component.
+    #[serde(default)]
+    pub fields: Vec<String>,
+    /// Unit of the logged values (see [`super::units::parse_unit`]); SI when absent.
+    pub unit: Option<String>,
+    /// Motor pole pairs, for unit `erpm`.
+    pub pole_pairs: Option<f64>,
+}
+
+/// The signals a log may carry; each optional, the reader says which are missing.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Signals {
+    /// Air-relative velocity in body axes (3).
+    pub velocity_body: Option<SignalMap>,
+    /// Velocity in world axes (3), rotated to body with the attitude.
+    pub velocity_world: Option<SignalMap>,
+    /// Body rates p, q, r (3).
+    pub rates: Option<SignalMap>,
+    /// Body angular acceleration (3), used for M = I ω̇ + ω × I ω.
+    pub angular_acceleration: Option<SignalMap>,
+    /// Rotor speeds, in vehicle rotor order (N).
+    pub rotor_speeds: Option<SignalMap>,
+    /// Rotor accelerations, in vehicle rotor order (N).
+    pub rotor_accelerations: Option<SignalMap>,
+    /// Force on the airframe, gravity excluded (3).
+    pub force: Option<SignalMap>,
+    /// Moment on the airframe (3).
+    pub moment: Option<SignalMap>,
+    /// Accelerometer specific force (3), for F = m a.
+    pub specific_force: Option<SignalMap>,
+    /// Height above ground, up (1).
+    pub height: Option<SignalMap>,
+    /// Attitude quaternion body→world, components listed w, x, y, z (4).
+    pub attitude: Option<SignalMap>,
+}
+
+/// MCAP-specific options.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct McapOptions {
+    /// Topic whose message times form the common time base (default: the rates topic).
+    pub time_base: Option<String>,
+    /// Per-topic time field overriding `[time]` (e.g. px4 `timestamp` in µs), by topic.
+    #[serde(default)]
+    pub topic_time: std::collections::BTreeMap<String, TopicTime>,
+}
+
+/// The time field of one topic's messages.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TopicTime {
+    /// Field path of the time (a number, or a ROS time `{sec, nanosec}`).
+    pub field: String,
+    /// Unit of a numeric time field (default s).
+    pub unit: Option<String>,
+}
+
+/// A parsed mapping file.
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Mapping {
+    /// Axis conventions.
+    #[serde(default)]
+    pub frames: Frames,
+    /// Time column (CSV; MCAP uses message log time when absent).
+    pub time: Option<SignalMap>,
+    /// Signal locations.
+    #[serde(default)]
+    pub signals: Signals,
+    /// Derivation options, overriding those of the read options.
+    pub derive: Option<DeriveOptions>,
+    /// MCAP options.
+    #[serde(default)]
+    pub mcap: McapOptions,
+}
+
+/// A signal kind of the sample contract before derivation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Signal {
+    /// Time.
+    Time,
+    /// Body velocity.
+    VelocityBody,
+    /// World velocity.
+    VelocityWorld,
+    /// Body rates.
+    Rates,
+    /// Body angular acceleration.
+    AngularAcceleration,
+    /// Rotor speeds.
+    RotorSpeeds,
+    /// Rotor accelerations.
+    RotorAccelerations,
+    /// Force.
+    Force,
+    /// Moment.
+    Moment,
+    /// Specific force.
+    SpecificForce,
+    /// Height.
+    Height,
+    /// Attitude quaternion.
+    Attitude,
+}
+
+impl Signal {
+    /// Every signal, in slot order.
+    pub const ALL: [Signal; 12] = [
+        Self::Time,
+        Self::VelocityBody,
+        Self::VelocityWorld,
+        Self::Rates,
+        Self::AngularAcceleration,
+        Self::RotorSpeeds,
+        Self::RotorAccelerations,
+        Self::Force,
+        Self::Moment,
+        Self::SpecificForce,
+        Self::Height,
+        Self::Attitude,
+    ];
+
+    /// Key in the mapping file.
+    pub fn key(self) -> &'static str {
+        match self {
+            Self::Time => "time",
+            Self::VelocityBody => "velocity_body",
+            Self::VelocityWorld => "velocity_world",
+            Self::Rates => "rates",
+            Self::AngularAcceleration => "angular_acceleration",
+            Self::RotorSpeeds => "rotor_speeds",
+            Self::RotorAccelerations => "rotor_accelerations",
+            Self::Force => "force",
+            Self::Moment => "moment",
+            Self::SpecificForce => "specific_force",
+            Self::Height => "height",
+            Self::Attitude => "attitude",
+        }
+    }
+
+    /// Physical dimension.
+    pub fn dimension(self) -> Dimension {
+        match self {
+            Self::Time => Dimension::Time,
+            Self::VelocityBody | Self::VelocityWorld => Dimension::Speed,
+            Self::Rates | Self::RotorSpeeds => Dimension::AngularRate,
+            Self::AngularAcceleration | Self::RotorAccelerations => Dimension::AngularAcceleration,
+            Self::Force => Dimension::Force,
+            Self::Moment => Dimension::Moment,
+            Self::SpecificForce => Dimension::Acceleration,
+            Self::Height => Dimension::Length,
+            Self::Attitude => Dimension::Dimensionless,
+        }
+    }
+
+    /// Number of components for a vehicle with `rotors` rotors.
+    pub fn components(self, rotors: usize) -> usize {
+        match self {
+            Self::Time | Self::Height => 1,
+            Self::RotorSpeeds | Self::RotorAccelerations => rotors,
+            Self::Attitude => 4,
+            _ => 3,
+        }
+    }
+}
+
+impl Mapping {
+    /// Reads a mapping file; errors name the file and the TOML position.
+    pub fn from_toml_file(path: &Path) -> Result<Self, IoError> {
+        let name = display_name(path);
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            IoError::new(&name, Location::File, None, ErrorKind::Read(e.to_string()))
+        })?;
+        Self::from_toml_str(&text, &name)
+    }
+
+    /// Parses mapping TOML text; `name` is the file name used in errors.
+    pub fn from_toml_str(text: &str, name: &str) -> Result<Self, IoError> {
+        let mapping: Mapping = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| {
+                1 + text.as_bytes()[..s.start.min(text.len())]
+                    .iter()
+                    .filter(|&&b| b == b'\n')
+                    .count()
+            });
+            let loc = line.map_or(Location::File, |l| Location::Line(l as u64));
+            IoError::new(
+                name,
+                loc,
+                None,
+                ErrorKind::Format(e.message().trim().to_string()),
+            )
+        })?;
+        for signal in Signal::ALL {
+            if let Some(map) = mapping.get(signal) {
+                check_signal_map(signal, map).map_err(|m| {
+                    IoError::new(
+                        name,
+                        Location::File,
+                        key(&key_path(signal)),
+                        ErrorKind::Mapping(m),
+                    )
+                })?;
+            }
+        }
+        Ok(mapping)
+    }
+
+    /// The location of `signal`, if mapped.
+    pub fn get(&self, signal: Signal) -> Option<&SignalMap> {
+        let s = &self.signals;
+        match signal {
+            Signal::Time => self.time.as_ref(),
+            Signal::VelocityBody => s.velocity_body.as_ref(),
+            Signal::VelocityWorld => s.velocity_world.as_ref(),
+            Signal::Rates => s.rates.as_ref(),
+            Signal::AngularAcceleration => s.angular_acceleration.as_ref(),
+            Signal::RotorSpeeds => s.rotor_speeds.as_ref(),
+            Signal::RotorAccelerations => s.rotor_accelerations.as_ref(),
+            Signal::Force => s.force.as_ref(),
+            Signal::Moment => s.moment.as_ref(),
+            Signal::SpecificForce => s.specific_force.as_ref(),
+            Signal::Height => s.height.as_ref(),
+            Signal::Attitude => s.attitude.as_ref(),
+        }
+    }
+
+    fn slot(&mut self, signal: Signal) -> &mut Option<SignalMap> {
+        let s = &mut self.signals;
+        match signal {
+            Signal::Time => &mut self.time,
+            Signal::VelocityBody => &mut s.velocity_body,
+            Signal::VelocityWorld => &mut s.velocity_world,
+            Signal::Rates => &mut s.rates,
+            Signal::AngularAcceleration => &mut s.angular_acceleration,
+            Signal::RotorSpeeds => &mut s.rotor_speeds,
+            Signal::RotorAccelerations => &mut s.rotor_accelerations,
+            Signal::Force => &mut s.force,
+            Signal::Moment => &mut s.moment,
+            Signal::SpecificForce => &mut s.specific_force,
+            Signal::Height => &mut s.height,
+            Signal::Attitude => &mut s.attitude,
+        }
+    }
+
+    /// Sets the columns of `signal` (SI units).
+    pub fn set_columns(&mut self, signal: Signal, columns: Vec<String>) {
+        *self.slot(signal) = Some(SignalMap {
+            columns,
+            ..SignalMap::default()
+        });
+    }
+
+    /// Conversion factor to SI of `signal`'s unit (1 when no unit is given).
+    pub fn factor(&self, signal: Signal) -> f64 {
+        self.get(signal)
+            .and_then(|m| {
+                m.unit
+                    .as_ref()
+                    .map(|u| unit_for(u, m.pole_pairs, signal.dimension(), signal.key()))
+            })
+            .and_then(Result::ok)
+            .map_or(1.0, |u| u.to_si)
+    }
+}
+
+fn key_path(signal: Signal) -> String {
+    if signal == Signal::Time {
+        "time".into()
+    } else {
+        format!("signals.{}", signal.key())
+    }
+}
+
+fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), String> {
+    if let Some(unit) = &map.unit {
+        unit_for(unit, map.pole_pairs, signal.dimension(), signal.key())?;
+    }
+    if map.columns.is_empty() && map.fields.is_empty() {
+        return Err("give `columns` (CSV) or `topic` and `fields` (MCAP)".into());
+    }
+    if !map.fields.is_empty() && map.topic.is_none() && signal != Signal::Time {
+        return Err("`fields` needs a `topic`".into());
+    }
+    let fixed = signal.components(0);
+    for (what, list) in [("columns", &map.columns), ("fields", &map.fields)] {
+        if !list.is_empty()
+            && !matches!(signal, Signal::RotorSpeeds | Signal::RotorAccelerations)
+            && list.len() != fixed
+        {
+            return Err(format!(
+                "`{what}` lists {} names, {} needs {fixed}",
+                list.len(),
+                signal.key()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The mapping of a DESIGN.md contract CSV with header `header`: SI units, FRD/NED,
+/// `omega_1..omega_N` in vehicle order, optional `ax..`, `height`, `qw..`,
+/// `omega_dot_1..`. Errors name the file (line 1) and the column concerned.
+pub fn contract_mapping(header: &[&str], rotors: usize, file: &str) -> Result<Mapping, IoError> {
+    let err = |col: Option<String>, kind| IoError::new(file, Location::Line(1), col, kind);
+    let mut seen = HashSet::new();
+    for name in header {
+        if !seen.insert(*name) {
+            return Err(err(
+                super::error::column(name),
+                ErrorKind::Format("duplicate column name".into()),
+            ));
+        }
+    }
+    let has = |c: &str| seen.contains(c);
+    let mut m = Mapping::default();
+    let groups: [(Signal, Vec<String>); 8] = [
+        (Signal::Time, vec!["t".into()]),
+        (Signal::VelocityBody, names(&["u", "v", "w"])),
+        (Signal::Rates, names(&["p", "q", "r"])),
+        (Signal::Force, names(&["fx", "fy", "fz"])),
+        (Signal::Moment, names(&["mx", "my", "mz"])),
+        (Signal::SpecificForce, names(&["ax", "ay", "az"])),
+        (Signal::Height, vec!["height".into()]),
+        (Signal::Attitude, names(&["qw", "qx", "qy", "qz"])),
+    ];
+    for (signal, cols) in groups {
+        let present = cols.iter().filter(|c| has(c)).count();
+        if present == cols.len() {
+            m.set_columns(signal, cols);
+        } else if present > 0 {
+            let missing = cols
+                .iter()
+                .find(|c| !has(c))
+                .expect("some column is missing");
+            return Err(err(
+                super::error::column(missing),
+                ErrorKind::MissingSignal(format!(
+                    "missing column of {} (has {present} of {})",
+                    signal.key(),
+                    cols.join(",")
+                )),
+            ));
+        }
+    }
+    for (signal, prefix) in [
+        (Signal::RotorSpeeds, "omega_"),
+        (Signal::RotorAccelerations, "omega_dot_"),
+    ] {
+        let count = header
+            .iter()
+            .filter(|h| {
+                h.strip_prefix(prefix)
+                    .is_some_and(|n| n.parse::<usize>().is_ok())
+            })
+            .count();
+        if count == 0 {
+            continue;
+        }
+        if count != rotors {
+            return Err(err(
+                None,
+                ErrorKind::Mapping(format!(
+                    "header has {count} {prefix}* columns but the vehicle has {rotors} rotors"
+                )),
+            ));
+        }
+        let cols: Vec<String> = (1..=rotors).map(|i| format!("{prefix}{i}")).collect();
+        if let Some(missing) = cols.iter().find(|c| !has(c)) {
+            return Err(err(
+                super::error::column(missing),
+                ErrorKind::MissingSignal(format!(
+                    "missing column (rotors are numbered {prefix}1..{prefix}{rotors})"
+                )),
+            ));
+        }
+        m.set_columns(signal, cols);
+    }
+    Ok(m)
+}
+
+fn names(list: &[&str]) -> Vec<String> {
+    list.iter().map(|s| s.to_string()).collect()
+}

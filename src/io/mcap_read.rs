@@ -1,0 +1,478 @@
+//! MCAP source: messages read in file order with the `mcap` crate's streaming
+//! (sans-I/O) linear reader, JSON payloads decoded by field path, asynchronous topics
+//! aligned on the time base topic by linear interpolation when the bracketing messages
+//! are at most `max_gap` apart. A base sample that cannot be aligned is reported as a
+//! sample-level error (dropped and counted, never bridged), so the time step it leaves
+//! splits the log into segments.
+
+use std::collections::{HashMap, VecDeque};
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
+use mcap::records::Record;
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
+use serde_json::Value;
+
+use super::RowSource;
+use super::error::{ErrorKind, IoError, Location, field};
+use super::mapping::{Mapping, Signal};
+use super::slots::SlotLayout;
+
+/// Largest MCAP record (or chunk) accepted, bytes: a corrupt length field is an error,
+/// not an allocation of that size.
+pub const MAX_RECORD_BYTES: usize = 256 << 20;
+
+/// One step of a field path: `key` or `[index]`.
+#[derive(Debug, Clone, PartialEq)]
+enum Step {
+    Key(String),
+    Index(usize),
+}
+
+/// Parses `a.b[2].c`.
+fn parse_path(path: &str) -> Result<Vec<Step>, String> {
+    let mut steps = Vec::new();
+    for part in path.split('.') {
+        let (key, mut rest) = part.split_once('[').map_or((part, ""), |(k, r)| (k, r));
+        if key.is_empty() && steps.is_empty() && rest.is_empty() {
+            return Err(format!("empty field path {path:?}"));
+        }
+        if !key.is_empty() {
+            steps.push(Step::Key(key.to_string()));
+        }
+        while !rest.is_empty() {
+            let (idx, after) = rest
+                .split_once(']')
+                .ok_or_else(|| format!("unclosed '[' in {path:?}"))?;
+            let i = idx
+                .parse()
+                .map_err(|_| format!("bad index {idx:?} in {path:?}"))?;
+            steps.push(Step::Index(i));
+            rest = after.strip_prefix('[').unwrap_or(after);
+            if !after.is_empty() && !after.starts_with('[') {
+                return Err(format!("unexpected {after:?} in {path:?}"));
+            }
+        }
+    }
+    Ok(steps)
+}
+
+fn lookup<'v>(value: &'v Value, steps: &[Step]) -> Option<&'v Value> {
+    steps.iter().try_fold(value, |v, s| match s {
+        Step::Key(k) => v.get(k),
+        Step::Index(i) => v.get(*i),
+    })
+}
+
+/// A number, or a ROS time `{sec, nanosec}` / `{secs, nsecs}` in seconds.
+fn as_number(v: &Value) -> Option<f64> {
+    if let Some(x) = v.as_f64() {
+        return Some(x);
+    }
+    let sec = v.get("sec").or_else(|| v.get("secs"))?.as_f64()?;
+    let ns = v.get("nanosec").or_else(|| v.get("nsecs"))?.as_f64()?;
+    Some(sec + ns * 1e-9)
+}
+
+/// How a topic's messages are decoded.
+enum Decoder {
+    /// Not known yet (no channel record seen).
+    Unknown,
+    /// JSON text.
+    Json,
+    /// ROS 2 CDR with its parsed schema.
+    Cdr(Box<super::ros2msg::Schema>),
+}
+
+/// A mapped topic and its messages waiting for alignment.
+struct Topic {
+    decoder: Decoder,
+    /// Time field and its factor to seconds; message log time when `None`.
+    time: Option<(Vec<Step>, f64)>,
+    name: String,
+    /// (slot, path) of every mapped field of this topic.
+    fields: Vec<(usize, String, Vec<Step>)>,
+    /// (time s, values in `fields` order, message index).
+    queue: VecDeque<(f64, Vec<f64>, u64)>,
+    seen: bool,
+}
+
+/// Streaming MCAP source; see the module docs.
+pub struct McapSource {
+    file: String,
+    handle: File,
+    reader: LinearReader,
+    channel_topic: HashMap<u16, Option<usize>>,
+    /// Schemas by id: (name, encoding, text).
+    schemas: HashMap<u16, (String, String, Vec<u8>)>,
+    topics: Vec<Topic>,
+    base: usize,
+    max_gap: f64,
+    message_index: u64,
+    latest_time: f64,
+    eof: bool,
+}
+
+impl McapSource {
+    /// Opens `path` with `mapping` (topics and fields) for `rotors` rotors.
+    pub fn open(
+        path: &Path,
+        file: &str,
+        mapping: &Mapping,
+        rotors: usize,
+        max_gap: f64,
+    ) -> Result<(Self, SlotLayout), IoError> {
+        let layout = SlotLayout::resolve(mapping, rotors, file, true)?;
+        let handle = File::open(path).map_err(|e| {
+            IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
+        })?;
+        let mut topics: Vec<Topic> = Vec::new();
+        for slot in 0..layout.len() {
+            let name = layout.topic(slot).unwrap_or_default().to_string();
+            let field_name = layout.source_name(slot).to_string();
+            let steps = parse_path(&field_name).map_err(|m| {
+                IoError::new(
+                    file,
+                    Location::File,
+                    field(&format!("{name}.{field_name}")),
+                    ErrorKind::Mapping(m),
+                )
+            })?;
+            let idx = match topics.iter().position(|t| t.name == name) {
+                Some(i) => i,
+                None => {
+                    topics.push(Topic {
+                        decoder: Decoder::Unknown,
+                        time: None,
+                        name: name.clone(),
+                        fields: Vec::new(),
+                        queue: VecDeque::new(),
+                        seen: false,
+                    });
+                    topics.len() - 1
+                }
+            };
+            topics[idx].fields.push((slot, field_name, steps));
+        }
+        let base_name = mapping
+            .mcap
+            .time_base
+            .clone()
+            .or_else(|| mapping.signals.rates.as_ref().and_then(|r| r.topic.clone()))
+            .unwrap_or_default();
+        let base = topics
+            .iter()
+            .position(|t| t.name == base_name)
+            .ok_or_else(|| {
+                IoError::new(
+                    file,
+                    Location::File,
+                    super::error::key("mcap.time_base"),
+                    ErrorKind::Mapping(format!("time base topic {base_name:?} maps no signal")),
+                )
+            })?;
+        let time_field = match mapping.get(Signal::Time) {
+            Some(m) if !m.fields.is_empty() => {
+                let steps = parse_path(&m.fields[0]).map_err(|e| {
+                    IoError::new(
+                        file,
+                        Location::File,
+                        super::error::key("time"),
+                        ErrorKind::Mapping(e),
+                    )
+                })?;
+                Some((steps, mapping.factor(Signal::Time)))
+            }
+            _ => None,
+        };
+        for topic in &mut topics {
+            topic.time = match mapping.mcap.topic_time.get(&topic.name) {
+                Some(tt) => {
+                    let bad = |m: String| {
+                        IoError::new(
+                            file,
+                            Location::File,
+                            super::error::key(&format!("mcap.topic_time.{}", topic.name)),
+                            ErrorKind::Mapping(m),
+                        )
+                    };
+                    let steps = parse_path(&tt.field).map_err(bad)?;
+                    let factor = match &tt.unit {
+                        Some(u) => {
+                            super::units::unit_for(u, None, super::units::Dimension::Time, "time")
+                                .map_err(bad)?
+                                .to_si
+                        }
+                        None => 1.0,
+                    };
+                    Some((steps, factor))
+                }
+                None => time_field.clone(),
+            };
+        }
+        let source = Self {
+            file: file.to_string(),
+            handle,
+            reader: LinearReader::new_with_options(
+                mcap::sans_io::linear_reader::LinearReaderOptions::default()
+                    .with_record_length_limit(MAX_RECORD_BYTES),
+            ),
+            channel_topic: HashMap::new(),
+            schemas: HashMap::new(),
+            topics,
+            base,
+            max_gap,
+            message_index: 0,
+            latest_time: f64::NEG_INFINITY,
+            eof: false,
+        };
+        Ok((source, layout))
+    }
+
+    fn err(&self, loc: Location, field_path: Option<String>, kind: ErrorKind) -> IoError {
+        IoError::new(&self.file, loc, field_path, kind)
+    }
+
+    /// Reads the next mapped message into its topic queue; false at end of file.
+    fn read_message(&mut self) -> Result<bool, IoError> {
+        loop {
+            let event = match self.reader.next_event() {
+                None => return Ok(false),
+                Some(Err(e)) => {
+                    return Err(self.err(
+                        Location::Record(self.message_index),
+                        None,
+                        ErrorKind::Format(format!("MCAP: {e}")),
+                    ));
+                }
+                Some(Ok(ev)) => ev,
+            };
+            let (opcode, data) = match event {
+                LinearReadEvent::ReadRequest(need) => {
+                    let n = self.handle.read(self.reader.insert(need)).map_err(|e| {
+                        IoError::new(
+                            &self.file,
+                            Location::File,
+                            None,
+                            ErrorKind::Read(e.to_string()),
+                        )
+                    })?;
+                    self.reader.notify_read(n);
+                    continue;
+                }
+                LinearReadEvent::Record { opcode, data } => (opcode, data.to_vec()),
+            };
+            let record = mcap::parse_record(opcode, &data).map_err(|e| {
+                IoError::new(
+                    &self.file,
+                    Location::Record(self.message_index),
+                    None,
+                    ErrorKind::Format(format!("MCAP record: {e}")),
+                )
+            })?;
+            match record {
+                Record::Schema { header, data } => {
+                    self.schemas
+                        .insert(header.id, (header.name, header.encoding, data.into_owned()));
+                }
+                Record::Channel(ch) => {
+                    let topic = self.topics.iter().position(|t| t.name == ch.topic);
+                    if let Some(t) = topic {
+                        let decoder = self.decoder_for(&ch)?;
+                        self.topics[t].decoder = decoder;
+                        self.topics[t].seen = true;
+                    }
+                    self.channel_topic.insert(ch.id, topic);
+                }
+                Record::Message { header, data } => {
+                    let index = self.message_index;
+                    self.message_index += 1;
+                    let topic = match self.channel_topic.get(&header.channel_id) {
+                        Some(Some(t)) => *t,
+                        Some(None) => continue,
+                        None => {
+                            return Err(self.err(
+                                Location::Record(index),
+                                None,
+                                ErrorKind::Format(format!(
+                                    "message on unknown channel {}",
+                                    header.channel_id
+                                )),
+                            ));
+                        }
+                    };
+                    self.decode(topic, index, header.log_time, &data)?;
+                    return Ok(true);
+                }
+                _ => {}
+            }
+        }
+    }
+
+    fn decoder_for(&self, ch: &mcap::records::Channel) -> Result<Decoder, IoError> {
+        let fail = |m: String| self.err(Location::File, field(&ch.topic), ErrorKind::Format(m));
+        match ch.message_encoding.as_str() {
+            "json" => Ok(Decoder::Json),
+            "cdr" => {
+                let (name, encoding, text) = self.schemas.get(&ch.schema_id).ok_or_else(|| {
+                    fail(format!(
+                        "CDR channel without schema (schema id {})",
+                        ch.schema_id
+                    ))
+                })?;
+                if encoding != "ros2msg" {
+                    return Err(fail(format!(
+                        "CDR schema encoding {encoding:?} is not supported (supported: \"ros2msg\")"
+                    )));
+                }
+                let text = std::str::from_utf8(text)
+                    .map_err(|_| fail("schema text is not UTF-8".into()))?;
+                let schema = super::ros2msg::parse_schema(name, text)
+                    .map_err(|m| fail(format!("schema {name}: {m}")))?;
+                Ok(Decoder::Cdr(Box::new(schema)))
+            }
+            other => Err(fail(format!(
+                "message encoding {other:?} is not supported (supported: \"json\", \"cdr\")"
+            ))),
+        }
+    }
+
+    fn decode(
+        &mut self,
+        topic: usize,
+        index: u64,
+        log_time: u64,
+        data: &[u8],
+    ) -> Result<(), IoError> {
+        let loc = Location::Record(index);
+        let name = self.topics[topic].name.clone();
+        let value: Value = match &self.topics[topic].decoder {
+            Decoder::Cdr(schema) => super::cdr::decode(schema, data).map_err(|m| {
+                self.err(
+                    loc,
+                    field(&name),
+                    ErrorKind::Format(format!("invalid CDR: {m}")),
+                )
+            })?,
+            _ => serde_json::from_slice(data).map_err(|e| {
+                self.err(
+                    loc,
+                    field(&name),
+                    ErrorKind::Format(format!("invalid JSON: {e}")),
+                )
+            })?,
+        };
+        let t = match &self.topics[topic].time {
+            Some((steps, factor)) => {
+                let v = lookup(&value, steps).and_then(as_number).ok_or_else(|| {
+                    self.err(
+                        loc,
+                        field(&name),
+                        ErrorKind::MissingSignal("time field missing or not a number".into()),
+                    )
+                })?;
+                v * factor
+            }
+            None => log_time as f64 * 1e-9,
+        };
+        let mut values = Vec::with_capacity(self.topics[topic].fields.len());
+        for (_, path, steps) in &self.topics[topic].fields {
+            let v = lookup(&value, steps).ok_or_else(|| {
+                self.err(
+                    loc,
+                    field(&format!("{name}.{path}")),
+                    ErrorKind::MissingSignal("field not in the message".into()),
+                )
+            })?;
+            values.push(v.as_f64().ok_or_else(|| {
+                self.err(
+                    loc,
+                    field(&format!("{name}.{path}")),
+                    ErrorKind::NotANumber(v.to_string()),
+                )
+            })?);
+        }
+        if t.is_finite() {
+            self.latest_time = self.latest_time.max(t);
+        }
+        self.topics[topic].queue.push_back((t, values, index));
+        Ok(())
+    }
+
+    /// True when topic `j` can no longer get a message that brackets base time `tb`.
+    fn settled(&self, j: usize, tb: f64) -> bool {
+        self.eof
+            || self.topics[j].queue.back().is_some_and(|m| m.0 >= tb)
+            || self.latest_time > tb + self.max_gap
+    }
+}
+
+impl RowSource for McapSource {
+    fn file(&self) -> &str {
+        &self.file
+    }
+
+    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
+        loop {
+            let ready = match self.topics[self.base].queue.front() {
+                Some(&(tb, _, _)) => {
+                    (0..self.topics.len()).all(|j| j == self.base || self.settled(j, tb))
+                }
+                None => self.eof,
+            };
+            if !ready {
+                if !self.read_message()? {
+                    self.eof = true;
+                    if let Some(t) = self.topics.iter().find(|t| !t.seen) {
+                        return Err(self.err(
+                            Location::File,
+                            field(&t.name),
+                            ErrorKind::MissingSignal("topic not in the file".into()),
+                        ));
+                    }
+                }
+                continue;
+            }
+            let Some((tb, values, index)) = self.topics[self.base].queue.pop_front() else {
+                return Ok(None);
+            };
+            let loc = Location::Record(index);
+            for ((slot, _, _), v) in self.topics[self.base].fields.iter().zip(&values) {
+                raw[*slot] = *v;
+            }
+            for j in 0..self.topics.len() {
+                if j == self.base {
+                    continue;
+                }
+                let max_gap = self.max_gap;
+                let topic = &mut self.topics[j];
+                while topic.queue.len() >= 2 && topic.queue[1].0 <= tb {
+                    topic.queue.pop_front();
+                }
+                let aligned = match (topic.queue.front(), topic.queue.get(1)) {
+                    (Some(a), _) if a.0 == tb => Some(a.1.clone()),
+                    (Some(a), Some(b)) if a.0 < tb && b.0 > tb && b.0 - a.0 <= max_gap => {
+                        let w = (tb - a.0) / (b.0 - a.0);
+                        Some(a.1.iter().zip(&b.1).map(|(x, y)| x + w * (y - x)).collect())
+                    }
+                    _ => None,
+                };
+                let Some(vals) = aligned else {
+                    let name = topic.name.clone();
+                    return Err(self.err(
+                        loc,
+                        field(&name),
+                        ErrorKind::NotAligned(format!(
+                            "no messages within max_gap = {max_gap} s around t = {tb} s"
+                        )),
+                    ));
+                };
+                for ((slot, _, _), v) in topic.fields.iter().zip(vals) {
+                    raw[*slot] = v;
+                }
+            }
+            return Ok(Some((loc, Some(tb))));
+        }
+    }
+}

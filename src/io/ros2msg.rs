@@ -1,0 +1,236 @@
+//! ROS 2 `.msg` schema text as stored in MCAP (`ros2msg` schema encoding): the main
+//! definition followed by its dependencies, each after a `====` line and `MSG: pkg/Type`.
+//! Parsed into field lists the CDR decoder walks.
+
+use std::collections::HashMap;
+
+/// A primitive or nested field type.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FieldType {
+    /// bool, byte, char, int8…uint64, float32, float64.
+    Primitive(Primitive),
+    /// string / wstring (bounded or not).
+    String,
+    /// A nested message type, fully qualified `pkg/msg/Type`.
+    Message(String),
+}
+
+/// Primitive types with their CDR size in bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Primitive {
+    /// bool (1 byte).
+    Bool,
+    /// int8 (1 byte).
+    I8,
+    /// uint8, byte, char (1 byte).
+    U8,
+    /// int16.
+    I16,
+    /// uint16.
+    U16,
+    /// int32.
+    I32,
+    /// uint32.
+    U32,
+    /// int64.
+    I64,
+    /// uint64.
+    U64,
+    /// float32.
+    F32,
+    /// float64.
+    F64,
+}
+
+impl Primitive {
+    /// Size and CDR alignment, bytes.
+    pub fn size(self) -> usize {
+        match self {
+            Self::Bool | Self::I8 | Self::U8 => 1,
+            Self::I16 | Self::U16 => 2,
+            Self::I32 | Self::U32 | Self::F32 => 4,
+            Self::I64 | Self::U64 | Self::F64 => 8,
+        }
+    }
+}
+
+/// Array shape of a field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shape {
+    /// A single value.
+    Scalar,
+    /// `T[N]`: exactly N values, no length prefix.
+    Fixed(usize),
+    /// `T[]` or `T[<=N]`: a uint32 length prefix.
+    Sequence,
+}
+
+/// One field of a message definition.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Field {
+    /// Field name.
+    pub name: String,
+    /// Element type.
+    pub ty: FieldType,
+    /// Array shape.
+    pub shape: Shape,
+}
+
+/// All message definitions of one schema, by fully qualified name; `root` is the main one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Schema {
+    /// Fully qualified name of the main type.
+    pub root: String,
+    /// Definitions by fully qualified name.
+    pub types: HashMap<String, Vec<Field>>,
+}
+
+/// `pkg/Type` → `pkg/msg/Type`; names without a package resolve in `pkg` of the
+/// enclosing definition; `Header` means `std_msgs/msg/Header`.
+fn qualify(name: &str, pkg: &str) -> String {
+    match name.split('/').collect::<Vec<_>>().as_slice() {
+        [p, "msg", t] => format!("{p}/msg/{t}"),
+        [p, t] => format!("{p}/msg/{t}"),
+        ["Header"] => "std_msgs/msg/Header".into(),
+        [t] => format!("{pkg}/msg/{t}"),
+        _ => name.to_string(),
+    }
+}
+
+fn primitive(name: &str) -> Option<FieldType> {
+    use Primitive::*;
+    let p = match name {
+        "bool" => Bool,
+        "int8" => I8,
+        "uint8" | "byte" | "char" => U8,
+        "int16" => I16,
+        "uint16" => U16,
+        "int32" => I32,
+        "uint32" => U32,
+        "int64" => I64,
+        "uint64" => U64,
+        "float32" => F32,
+        "float64" => F64,
+        _ if name == "string"
+            || name == "wstring"
+            || name.starts_with("string<=")
+            || name.starts_with("wstring<=") =>
+        {
+            return Some(FieldType::String);
+        }
+        _ => return None,
+    };
+    Some(FieldType::Primitive(p))
+}
+
+fn parse_fields(text: &str, pkg: &str) -> Result<Vec<Field>, String> {
+    let mut fields = Vec::new();
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let mut parts = line.split_whitespace();
+        let (Some(ty), Some(name)) = (parts.next(), parts.next()) else {
+            return Err(format!(
+                "schema line {}: expected \"type name\", got {line:?}",
+                n + 1
+            ));
+        };
+        if name.contains('=') || parts.clone().next().is_some_and(|p| p.starts_with('=')) {
+            continue; // constant
+        }
+        let (base, shape) = match ty.split_once('[') {
+            None => (ty, Shape::Scalar),
+            Some((b, rest)) => {
+                let inner = rest
+                    .strip_suffix(']')
+                    .ok_or_else(|| format!("schema line {}: bad array {ty:?}", n + 1))?;
+                let shape =
+                    if inner.is_empty() || inner.starts_with("<=") {
+                        Shape::Sequence
+                    } else {
+                        Shape::Fixed(inner.parse().map_err(|_| {
+                            format!("schema line {}: bad array size {inner:?}", n + 1)
+                        })?)
+                    };
+                (b, shape)
+            }
+        };
+        let ty = primitive(base).unwrap_or_else(|| FieldType::Message(qualify(base, pkg)));
+        fields.push(Field {
+            name: name.to_string(),
+            ty,
+            shape,
+        });
+    }
+    Ok(fields)
+}
+
+/// Parses schema text whose main type is `name` (`pkg/msg/Type` or `pkg/Type`).
+pub fn parse_schema(name: &str, text: &str) -> Result<Schema, String> {
+    let root = qualify(name, "");
+    let mut types = HashMap::new();
+    let mut current = root.clone();
+    let mut body = String::new();
+    let pkg_of = |q: &str| q.split('/').next().unwrap_or("").to_string();
+    for line in text.lines() {
+        if line.starts_with("====") {
+            types.insert(current.clone(), parse_fields(&body, &pkg_of(&current))?);
+            body.clear();
+            continue;
+        }
+        if let Some(t) = line.strip_prefix("MSG:") {
+            current = qualify(t.trim(), "");
+            continue;
+        }
+        body.push_str(line);
+        body.push('\n');
+    }
+    types.insert(current.clone(), parse_fields(&body, &pkg_of(&current))?);
+    // builtin_interfaces are often left out of schema text.
+    for t in [
+        "builtin_interfaces/msg/Time",
+        "builtin_interfaces/msg/Duration",
+    ] {
+        types.entry(t.to_string()).or_insert_with(|| {
+            vec![
+                Field {
+                    name: "sec".into(),
+                    ty: FieldType::Primitive(Primitive::I32),
+                    shape: Shape::Scalar,
+                },
+                Field {
+                    name: "nanosec".into(),
+                    ty: FieldType::Primitive(Primitive::U32),
+                    shape: Shape::Scalar,
+                },
+            ]
+        });
+    }
+    let schema = Schema { root, types };
+    schema.check()?;
+    Ok(schema)
+}
+
+impl Schema {
+    /// Every referenced type is defined and the nesting is finite.
+    fn check(&self) -> Result<(), String> {
+        for (name, fields) in &self.types {
+            for f in fields {
+                if let FieldType::Message(m) = &f.ty
+                    && !self.types.contains_key(m)
+                {
+                    return Err(format!(
+                        "type {m:?} of field {name}.{} is not defined in the schema",
+                        f.name
+                    ));
+                }
+            }
+        }
+        if !self.types.contains_key(&self.root) {
+            return Err(format!("main type {:?} is not defined", self.root));
+        }
+        Ok(())
+    }
+}
