@@ -53,11 +53,10 @@ pub(crate) fn term_name(structure: &ModelStructure, column: usize) -> String {
     format!("{} ({})", structure.params[c.param].name, c.label)
 }
 
-/// The compressed design R[:, cols] (m × k) and target R[:, z_axis] of a column subset.
+/// The compressed design F[:, cols] (q × k) and target F[:, z_axis] of a column subset.
 pub(crate) fn compressed(acc: &Accumulator, cols: &[usize], axis: Axis) -> (Mat<f64>, Vec<f64>) {
-    let m = acc.m();
-    let x = Mat::from_fn(m, cols.len(), |i, j| acc.r(i, cols[j]));
-    let z = acc.r_column(acc.output_index(axis)).to_vec();
+    let x = Mat::from_fn(acc.rows(), cols.len(), |i, j| acc.r(i, cols[j]));
+    let z = acc.r_column(acc.output_index(axis));
     (x, z)
 }
 
