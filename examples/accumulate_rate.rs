@@ -22,8 +22,12 @@ fn main() {
     let v = Vehicle::preset("quad x", Preset::QuadX, 0.25, 1.0, props).expect("valid preset");
     let s = ModelStructure::eq22(&v, ModelOptions::default());
     let mut rng = StdRng::seed_from_u64(1);
-    let mut chunk = SampleChunk::with_capacity(4, CHUNK_SAMPLES, true);
-    for i in 0..CHUNK_SAMPLES {
+    let size: usize = std::env::var("CHUNK")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(CHUNK_SAMPLES);
+    let mut chunk = SampleChunk::with_capacity(4, size, true);
+    for i in 0..size {
         chunk.push(&Sample {
             t: i as f64 * 0.01,
             velocity: std::array::from_fn(|_| rng.random_range(-10.0..10.0)),
@@ -38,7 +42,7 @@ fn main() {
     let mut acc = Accumulator::new(&s);
     let mut ws = Workspace::default();
     let start = std::time::Instant::now();
-    let chunks = 1_000_000usize.div_ceil(CHUNK_SAMPLES);
+    let chunks = 1_000_000usize.div_ceil(size);
     for _ in 0..chunks {
         acc.push(&s, &chunk, &mut ws).expect("valid chunk");
     }
