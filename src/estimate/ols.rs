@@ -24,6 +24,9 @@ pub struct AxisOls {
     pub theta: Vec<f64>,
     /// Standard errors √(σ̂² (XᵀX)⁻¹_jj), white-residual assumption.
     pub std_error: Vec<f64>,
+    /// (XᵀX)⁻¹ over the kept columns, row-major; the white-residual covariance of θ̂ is
+    /// σ̂² (XᵀX)⁻¹.
+    pub xtx_inv: Vec<f64>,
     /// Residual sum of squares, (N or N m)².
     pub sse: f64,
     /// Residual variance σ̂² = SSE / (N − p_i), (N or N m)². The seed divides by N − 1;
@@ -91,6 +94,7 @@ pub fn axis_ols(
                 .map(|j| (residual_variance * ls.xtx_inv[j * k + j]).sqrt())
                 .collect(),
             theta: ls.theta,
+            xtx_inv: ls.xtx_inv,
             sse: ls.sse,
             residual_variance,
             dof,
