@@ -1,8 +1,9 @@
-//! Accumulates 1e6 quad× samples (full Eq. 22 model) on one thread and prints the wall
-//! time. Run under `/usr/bin/time` to relate it to CPU time on a shared machine:
+//! Accumulates 1e6 quad× samples (full Eq. 22 model) on one thread, fits, and runs the
+//! residual pass (L = 10) over the same samples, printing the wall time of each. Run under `/usr/bin/time` to relate it to CPU time on a shared machine:
 //! `cargo run --release --example accumulate_rate`.
 
 use mrsysid::CHUNK_SAMPLES;
+use mrsysid::estimate::{DiagnosticOptions, FitOptions, ResidualPass, fit};
 use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
 use mrsysid::sample::{Sample, SampleChunk};
 use mrsysid::stats::Accumulator;
@@ -54,5 +55,21 @@ fn main() {
         acc.rows(),
         secs,
         acc.count() as f64 / secs / 1e6
+    );
+    let start = std::time::Instant::now();
+    let f = fit(&s, &acc, &FitOptions::default()).expect("identifiable");
+    println!("fit: {:.3} ms", start.elapsed().as_secs_f64() * 1e3);
+    let mut pass = ResidualPass::new(&s, &f, DiagnosticOptions::default());
+    let start = std::time::Instant::now();
+    for _ in 0..chunks {
+        pass.push(&chunk, &mut ws).expect("valid chunk");
+    }
+    let d = pass.finish();
+    let secs = start.elapsed().as_secs_f64();
+    println!(
+        "residual pass: {} samples, {:.3} s wall, {:.2} M samples/s",
+        d.samples,
+        secs,
+        d.samples as f64 / secs / 1e6
     );
 }

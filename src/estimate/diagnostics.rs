@@ -10,8 +10,8 @@
 //! with B = Hᵀ(R⁻¹⊗I)H, W = R⁻¹, and Γ(k)_ab = (1/N) Σ_t v_{t,a} v_{t+k,b} the residual
 //! cross-correlation at lag k (the stationary R_vv of Morelli's formula). For white
 //! residuals (Γ(k) = 0, k ≠ 0, Γ(0) = R) it reduces to B⁻¹. Lags beyond L are taken as
-//! zero (rectangular window), so the pass costs O(N·L·p²) for p regressor columns:
-//! linear in N, never O(N²).
+//! zero (rectangular window), so the pass costs O(N·L·p²) for p regressor columns
+//! (computed per chunk as L matrix products): linear in N, never O(N²).
 //!
 //! The per-axis OLS estimates get Morelli's formula itself,
 //! Cov(θ̂_i) = (X_iᵀX_i)⁻¹ [Σ_{k=−L}^{L} r_i(k) Σ_t x_t x_{t+k}ᵀ] (X_iᵀX_i)⁻¹, with r_i the
@@ -21,6 +21,8 @@
 //! last L rows it saw, so two passes over consecutive segments merge exactly (the cross
 //! terms across the seam are added at merge time).
 
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -454,12 +456,44 @@ impl ResidualPass {
         }
     }
 
-    /// Lag products of rows within one segment.
+    /// Lag products of rows within one segment: for each lag k, Xᵀ\[0..n−k\] X\[k..n\] (and
+    /// the same for the residuals) as one matrix product (faer), not n outer products.
     fn add_within(&mut self, rows: &Rows) {
         let n = rows.len();
+        let p = self.p;
+        let x = Mat::from_fn(n, p, |t, i| rows.x[t * p + i]);
+        let v = Mat::from_fn(n, VW, |t, i| rows.v[t * VW + i]);
+        let mut sx = Mat::<f64>::zeros(p, p);
+        let mut sv = Mat::<f64>::zeros(VW, VW);
         for k in 0..=self.options.max_lag.min(n.saturating_sub(1)) {
-            for t in k..n {
-                self.outer(k, rows, t - k, rows, t);
+            let len = n - k;
+            matmul(
+                sx.as_mut(),
+                Accum::Replace,
+                x.as_ref().subrows(0, len).transpose(),
+                x.as_ref().subrows(k, len),
+                1.0,
+                Par::Seq,
+            );
+            matmul(
+                sv.as_mut(),
+                Accum::Replace,
+                v.as_ref().subrows(0, len).transpose(),
+                v.as_ref().subrows(k, len),
+                1.0,
+                Par::Seq,
+            );
+            let dst = &mut self.lag_xx[k * p * p..(k + 1) * p * p];
+            for (i, row) in dst.chunks_exact_mut(p).enumerate() {
+                row.iter_mut()
+                    .enumerate()
+                    .for_each(|(j, d)| *d += sx[(i, j)]);
+            }
+            let dst = &mut self.lag_vv[k * VW * VW..(k + 1) * VW * VW];
+            for (i, row) in dst.chunks_exact_mut(VW).enumerate() {
+                row.iter_mut()
+                    .enumerate()
+                    .for_each(|(j, d)| *d += sv[(i, j)]);
             }
         }
     }
