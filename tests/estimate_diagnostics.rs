@@ -59,7 +59,8 @@ fn pass(
 
 /// Splitting the stream into consecutive segments processed separately and merged in
 /// order gives the same diagnostics as one pass: histograms and counts exactly, lag sums
-/// to 1e-12 relative (different summation order only). Segments shorter than L test the
+/// to 1e-12 relative (different summation order only), coloured σ to 1e-10 (the sandwich
+/// (XᵀX)⁻¹ M (XᵀX)⁻¹ with cond(XᵀX) ~1e6 amplifies summation-order rounding in M). Segments shorter than L test the
 /// seam bookkeeping.
 #[test]
 fn merged_segments_equal_one_pass() {
@@ -104,8 +105,19 @@ fn merged_segments_equal_one_pass() {
             (a.normal_probability_correlation - b.normal_probability_correlation).abs() < 1e-12
         );
     }
-    for (a, b) in one.std_errors.iter().zip(&two.std_errors) {
-        assert!((a.coloured / b.coloured - 1.0).abs() < 1e-12, "{}", a.name);
+    for (a, b) in one.std_errors.iter().zip(&two.std_errors).chain(
+        one.ols_std_errors
+            .iter()
+            .flatten()
+            .zip(two.ols_std_errors.iter().flatten()),
+    ) {
+        assert!(
+            (a.coloured / b.coloured - 1.0).abs() < 1e-10,
+            "{} {:e} {:e}",
+            a.name,
+            a.coloured,
+            b.coloured
+        );
     }
 }
 
@@ -143,7 +155,7 @@ fn white_gaussian_residuals_look_white_and_normal() {
         }
         assert_eq!(a.autocorrelation[0], 1.0);
     }
-    for e in &d.std_errors {
+    for e in d.std_errors.iter().chain(d.ols_std_errors.iter().flatten()) {
         assert!((e.coloured / e.white - 1.0).abs() < 0.15, "{e:?}");
     }
 }
@@ -175,4 +187,14 @@ fn coloured_residuals_inflate_standard_errors() {
     let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
     assert!(mean > 1.5, "{mean}");
     assert!(ratios.iter().filter(|&&r| r > 1.3).count() * 4 >= ratios.len() * 3);
+    // Morelli's per-axis OLS form shows the same inflation.
+    let ols: Vec<f64> = d
+        .ols_std_errors
+        .iter()
+        .flatten()
+        .map(|e| e.coloured / e.white)
+        .collect();
+    println!("per-axis OLS coloured/white σ ratios {ols:?}");
+    assert!(ols.iter().sum::<f64>() / ols.len() as f64 > 1.5);
+    assert!(ols.iter().filter(|&&r| r > 1.3).count() * 4 >= ols.len() * 3);
 }

@@ -136,7 +136,9 @@ fn fsoa_equals_brute_force_refits() {
 
 /// Any split of the same data into chunks and threads gives the same fit to 1e-12
 /// relative: the accumulated factors differ by rounding only (~1e-16 ‖A‖), amplified by
-/// at most the condition number (~1e3) of the equilibrated designs.
+/// at most the condition number (~1e3) of the equilibrated designs. Quantities that can
+/// be statistically zero are compared on their natural scale: per-axis estimates on
+/// max(|θ|, σ), off-diagonal covariances on √(R_ii R_jj).
 #[test]
 fn any_split_gives_the_same_fit() {
     let n = 20_000;
@@ -166,7 +168,16 @@ fn any_split_gives_the_same_fit() {
     }
     for (x, y) in a.axes.iter().zip(&b.axes) {
         worst = worst.max(rel(x.ols.r2, y.ols.r2));
-        worst = worst.max(max_rel(&x.ols.theta, &y.ols.theta));
+        // Per-axis estimates include statistically-zero ones (|θ| < σ) whose last digits
+        // are not determined by a backward-stable solve; compare the equilibrated
+        // solution norm-wise (the quantity QR bounds by ~cond · ε).
+        let scales: Vec<f64> = x
+            .ols
+            .columns
+            .iter()
+            .map(|&c| whole.cross(c, c).sqrt())
+            .collect();
+        worst = worst.max(scaled_error(&y.ols.theta, &x.ols.theta, &scales));
         for (sx, sy) in x.fsoa.steps.iter().zip(&y.fsoa.steps) {
             assert_eq!(sx.chosen, sy.chosen);
             worst = worst.max(rel(sx.r2_chosen, sy.r2_chosen));
@@ -174,10 +185,10 @@ fn any_split_gives_the_same_fit() {
     }
     for i in 0..6 {
         for j in 0..6 {
-            worst = worst.max(rel(
-                a.residual_covariance[i][j],
-                b.residual_covariance[i][j],
-            ));
+            // Off-diagonal covariances may be near zero: compare on the correlation scale.
+            let scale = (a.residual_covariance[i][i] * a.residual_covariance[j][j]).sqrt();
+            let d = (a.residual_covariance[i][j] - b.residual_covariance[i][j]) / scale;
+            worst = worst.max(d.abs());
         }
         worst = worst.max(rel(a.metrics[i].nrmse, b.metrics[i].nrmse));
         worst = worst.max(rel(a.metrics[i].tic, b.metrics[i].tic));
@@ -280,9 +291,11 @@ fn dd_solve(mut a: Vec<Vec<Dd>>, mut b: Vec<Dd>) -> Vec<f64> {
 /// digits. Asserted: 6 significant digits in every component for the force axes
 /// (the δt/δ²t case), and 1e-6 norm-wise error of the equilibrated problem everywhere.
 /// On the moment axes the δa/δe/δr columns are ~1e-5 of the hub-force columns, so their
-/// coefficients are determined only to cond · ε · (column ratio) ≈ 1e-3 by any
-/// double-precision backward-stable method (the rounding of the f64 data alone moves
-/// them that much); f64 normal equations would lose cond² ε ≈ all digits everywhere.
+/// coefficients are sensitive at the rounding level: perturbing only the outputs by
+/// ±½ ulp moved the exact solution by 3.4e-4 (M_x), 2.5e-5 (M_y) and 3.5e-6 (M_z)
+/// componentwise (measured once with this test's data); the engine's componentwise
+/// errors there are 1–5e-3, so they are checked norm-wise only. f64 normal equations
+/// would lose cond² ε ≈ all digits everywhere.
 #[test]
 fn ill_conditioned_hover_design_keeps_six_digits() {
     const EPS: f64 = 3e-5;

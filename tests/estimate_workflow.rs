@@ -137,3 +137,11 @@ fn fit_serialises_to_json() {
     assert_eq!(json["axes"][2]["fsoa"]["axis"], "Fz");
     assert_eq!(json["mmr"]["dof"], (1000 - s.params.len()) as f64);
 }
+
+/// Threads each own an accumulator or a residual pass (compile-time check).
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<Accumulator>();
+    send::<mrsysid::estimate::ResidualPass>();
+    send::<mrsysid::estimate::Fit>();
+};

@@ -10,13 +10,19 @@
 //! with B = Hᵀ(R⁻¹⊗I)H, W = R⁻¹, and Γ(k)_ab = (1/N) Σ_t v_{t,a} v_{t+k,b} the residual
 //! cross-correlation at lag k (the stationary R_vv of Morelli's formula). For white
 //! residuals (Γ(k) = 0, k ≠ 0, Γ(0) = R) it reduces to B⁻¹. Lags beyond L are taken as
-//! zero (rectangular window), so the pass costs O(N·L·p²) for p regressor columns:
-//! linear in N, never O(N²).
+//! zero (rectangular window), so the pass costs O(N·L·p²) for p regressor columns
+//! (computed per chunk as L matrix products): linear in N, never O(N²).
+//!
+//! The per-axis OLS estimates get Morelli's formula itself,
+//! Cov(θ̂_i) = (X_iᵀX_i)⁻¹ [Σ_{k=−L}^{L} r_i(k) Σ_t x_t x_{t+k}ᵀ] (X_iᵀX_i)⁻¹, with r_i the
+//! autocorrelation of that axis' OLS residuals.
 //!
 //! The pass keeps the lag products Σ_t x_t x_{t+k}ᵀ and Σ_t v_t v_{t+k}ᵀ and the first and
 //! last L rows it saw, so two passes over consecutive segments merge exactly (the cross
 //! terms across the seam are added at merge time).
 
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -100,6 +106,9 @@ pub struct ColouredStdError {
     pub coloured: f64,
 }
 
+/// Residual row width: the six MMR residuals, then the six per-axis OLS residuals.
+const VW: usize = 12;
+
 /// Result of the residual pass.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ResidualDiagnostics {
@@ -111,6 +120,18 @@ pub struct ResidualDiagnostics {
     pub axes: Vec<AxisResiduals>,
     /// Per estimated MMR parameter.
     pub std_errors: Vec<ColouredStdError>,
+    /// Per axis ([`Axis`] order), per kept OLS term (named `param (label)`).
+    pub ols_std_errors: Vec<Vec<ColouredStdError>>,
+}
+
+/// The per-axis OLS model the pass evaluates alongside the MMR.
+#[derive(Debug, Clone)]
+struct OlsModel {
+    columns: Vec<usize>,
+    theta: Vec<f64>,
+    xtx_inv: Vec<f64>,
+    white: Vec<f64>,
+    terms: Vec<String>,
 }
 
 /// Streaming second pass over the data with the MMR estimates of a [`Fit`].
@@ -123,12 +144,13 @@ pub struct ResidualPass {
     param_index: Vec<usize>,
     names: Vec<String>,
     white: Vec<f64>,
+    ols: Vec<OlsModel>,
     options: DiagnosticOptions,
     p: usize,
     count: u64,
     /// (L+1) × p × p: Σ_t x_t x_{t+k}ᵀ.
     lag_xx: Vec<f64>,
-    /// (L+1) × 6 × 6: Σ_t v_t v_{t+k}ᵀ.
+    /// (L+1) × 12 × 12: Σ_t v_t v_{t+k}ᵀ over MMR and OLS residuals.
     lag_vv: Vec<f64>,
     head: Rows,
     tail: Rows,
@@ -145,7 +167,7 @@ struct Rows {
 
 impl Rows {
     fn len(&self) -> usize {
-        self.v.len() / 6
+        self.v.len() / VW
     }
 }
 
@@ -182,11 +204,22 @@ impl ResidualPass {
             param_index: fit.mmr.param_index.clone(),
             names: fit.mmr.parameters.iter().map(|e| e.name.clone()).collect(),
             white: fit.mmr.parameters.iter().map(|e| e.std_error).collect(),
+            ols: fit
+                .axes
+                .iter()
+                .map(|a| OlsModel {
+                    columns: a.ols.columns.clone(),
+                    theta: a.ols.theta.clone(),
+                    xtx_inv: a.ols.xtx_inv.clone(),
+                    white: a.ols.std_error.clone(),
+                    terms: a.ols.terms.clone(),
+                })
+                .collect(),
             options: DiagnosticOptions { bins, ..options },
             p,
             count: 0,
             lag_xx: vec![0.0; (l + 1) * p * p],
-            lag_vv: vec![0.0; (l + 1) * 36],
+            lag_vv: vec![0.0; (l + 1) * VW * VW],
             head: Rows::default(),
             tail: Rows::default(),
             hist,
@@ -202,7 +235,7 @@ impl ResidualPass {
         let p = self.p;
         let mut rows = Rows {
             x: vec![0.0; n * p],
-            v: vec![0.0; n * 6],
+            v: vec![0.0; n * VW],
         };
         for (c, col) in self.structure.columns.iter().enumerate() {
             let data = ws.column(c);
@@ -210,23 +243,31 @@ impl ResidualPass {
             let a = col.axis as usize;
             for (t, &x) in data.iter().enumerate() {
                 rows.x[t * p + c] = x;
-                rows.v[t * 6 + a] -= th * x;
+                rows.v[t * VW + a] -= th * x;
+            }
+        }
+        for (a, model) in self.ols.iter().enumerate() {
+            for (&c, &th) in model.columns.iter().zip(&model.theta) {
+                for (t, &x) in ws.column(c).iter().enumerate() {
+                    rows.v[t * VW + 6 + a] -= th * x;
+                }
             }
         }
         for (a, &axis) in Axis::ALL.iter().enumerate() {
             for (t, &z) in ws.output(axis).iter().enumerate() {
-                rows.v[t * 6 + a] += z;
+                rows.v[t * VW + a] += z;
+                rows.v[t * VW + 6 + a] += z;
             }
         }
         if let Some(i) = rows.v.iter().position(|v| !v.is_finite()) {
             return Err(AccumulateError::NonFinite {
-                field: format!("residual {}", Axis::ALL[i % 6]),
-                sample: self.count + (i / 6) as u64,
+                field: format!("residual {}", Axis::ALL[i % VW % 6]),
+                sample: self.count + (i / VW) as u64,
             });
         }
         for t in 0..n {
             for a in 0..6 {
-                self.bin(a, rows.v[t * 6 + a]);
+                self.bin(a, rows.v[t * VW + a]);
             }
         }
         let tail = std::mem::take(&mut self.tail);
@@ -286,7 +327,7 @@ impl ResidualPass {
         let l = self.options.max_lag;
         let axes = (0..6)
             .map(|a| {
-                let g0 = self.lag_vv[a * 6 + a];
+                let g0 = self.lag_vv[a * VW + a];
                 let mean = self.sum[a] / n;
                 let var = (g0 / n - mean * mean).max(0.0);
                 AxisResiduals {
@@ -299,7 +340,7 @@ impl ResidualPass {
                         self.count,
                     ),
                     autocorrelation: (0..=l)
-                        .map(|k| self.lag_vv[k * 36 + a * 6 + a] / g0)
+                        .map(|k| self.lag_vv[k * VW * VW + a * VW + a] / g0)
                         .collect(),
                     white_band95: 1.96 / n.sqrt(),
                 }
@@ -310,7 +351,41 @@ impl ResidualPass {
             max_lag: l,
             axes,
             std_errors: self.coloured_std_errors(),
+            ols_std_errors: (0..6).map(|a| self.ols_coloured_std_errors(a)).collect(),
         }
+    }
+
+    /// Morelli's (XᵀX)⁻¹ [Σ_k r(k) (S_k + S_kᵀ [k > 0])] (XᵀX)⁻¹ for the OLS of axis `a`.
+    fn ols_coloured_std_errors(&self, a: usize) -> Vec<ColouredStdError> {
+        let model = &self.ols[a];
+        let n = self.count as f64;
+        let p = self.p;
+        let k = model.columns.len();
+        let mut middle = vec![0.0; k * k];
+        for lag in 0..=self.options.max_lag {
+            let r = self.lag_vv[lag * VW * VW + (6 + a) * VW + 6 + a] / n;
+            let s = &self.lag_xx[lag * p * p..(lag + 1) * p * p];
+            for (i, &ci) in model.columns.iter().enumerate() {
+                for (j, &cj) in model.columns.iter().enumerate() {
+                    let mut v = s[ci * p + cj];
+                    if lag > 0 {
+                        v += s[cj * p + ci];
+                    }
+                    middle[i * k + j] += r * v;
+                }
+            }
+        }
+        let b = &model.xtx_inv;
+        (0..k)
+            .map(|d| {
+                let var = quadratic_diagonal(b, &middle, k, d);
+                ColouredStdError {
+                    name: model.terms[d].clone(),
+                    white: model.white[d],
+                    coloured: if var >= 0.0 { var.sqrt() } else { f64::NAN },
+                }
+            })
+            .collect()
     }
 
     /// B⁻¹ [T_0 + Σ_{k≥1} (T_k + T_kᵀ)] B⁻¹ with T_k[p,q] = Σ_ij (W Γ(k) W)_{a(i) a(j)}
@@ -329,7 +404,7 @@ impl ResidualPass {
             let mut gamma = [[0.0; 6]; 6];
             for (a, row) in gamma.iter_mut().enumerate() {
                 for (b, g) in row.iter_mut().enumerate() {
-                    *g = self.lag_vv[k * 36 + a * 6 + b] / n;
+                    *g = self.lag_vv[k * VW * VW + a * VW + b] / n;
                 }
             }
             let m = sandwich6(&self.weight, &gamma);
@@ -355,13 +430,7 @@ impl ResidualPass {
         let b = &self.covariance;
         (0..np)
             .map(|d| {
-                // (B⁻¹ M B⁻¹)_dd = Σ_pq B⁻¹_dp M_pq B⁻¹_qd
-                let mut var = 0.0;
-                for pp in 0..np {
-                    for q in 0..np {
-                        var += b[d * np + pp] * middle[pp * np + q] * b[q * np + d];
-                    }
-                }
+                let var = quadratic_diagonal(b, &middle, np, d);
                 ColouredStdError {
                     name: self.names[d].clone(),
                     white: self.white[d],
@@ -387,12 +456,44 @@ impl ResidualPass {
         }
     }
 
-    /// Lag products of rows within one segment.
+    /// Lag products of rows within one segment: for each lag k, Xᵀ\[0..n−k\] X\[k..n\] (and
+    /// the same for the residuals) as one matrix product (faer), not n outer products.
     fn add_within(&mut self, rows: &Rows) {
         let n = rows.len();
+        let p = self.p;
+        let x = Mat::from_fn(n, p, |t, i| rows.x[t * p + i]);
+        let v = Mat::from_fn(n, VW, |t, i| rows.v[t * VW + i]);
+        let mut sx = Mat::<f64>::zeros(p, p);
+        let mut sv = Mat::<f64>::zeros(VW, VW);
         for k in 0..=self.options.max_lag.min(n.saturating_sub(1)) {
-            for t in k..n {
-                self.outer(k, rows, t - k, rows, t);
+            let len = n - k;
+            matmul(
+                sx.as_mut(),
+                Accum::Replace,
+                x.as_ref().subrows(0, len).transpose(),
+                x.as_ref().subrows(k, len),
+                1.0,
+                Par::Seq,
+            );
+            matmul(
+                sv.as_mut(),
+                Accum::Replace,
+                v.as_ref().subrows(0, len).transpose(),
+                v.as_ref().subrows(k, len),
+                1.0,
+                Par::Seq,
+            );
+            let dst = &mut self.lag_xx[k * p * p..(k + 1) * p * p];
+            for (i, row) in dst.chunks_exact_mut(p).enumerate() {
+                row.iter_mut()
+                    .enumerate()
+                    .for_each(|(j, d)| *d += sx[(i, j)]);
+            }
+            let dst = &mut self.lag_vv[k * VW * VW..(k + 1) * VW * VW];
+            for (i, row) in dst.chunks_exact_mut(VW).enumerate() {
+                row.iter_mut()
+                    .enumerate()
+                    .for_each(|(j, d)| *d += sv[(i, j)]);
             }
         }
     }
@@ -421,10 +522,10 @@ impl ResidualPass {
         for (row, &xi) in dst.chunks_exact_mut(p).zip(xs) {
             row.iter_mut().zip(xt).for_each(|(d, &xj)| *d += xi * xj);
         }
-        let vs = &a.v[s * 6..(s + 1) * 6];
-        let vt = &b.v[t * 6..(t + 1) * 6];
-        let dst = &mut self.lag_vv[k * 36..(k + 1) * 36];
-        for (row, &vi) in dst.chunks_exact_mut(6).zip(vs) {
+        let vs = &a.v[s * VW..(s + 1) * VW];
+        let vt = &b.v[t * VW..(t + 1) * VW];
+        let dst = &mut self.lag_vv[k * VW * VW..(k + 1) * VW * VW];
+        for (row, &vi) in dst.chunks_exact_mut(VW).zip(vs) {
             row.iter_mut().zip(vt).for_each(|(d, &vj)| *d += vi * vj);
         }
     }
@@ -440,7 +541,7 @@ impl ResidualPass {
             .extend_from_slice(&rows.x[rows.x.len() - rows.len().min(l) * self.p..]);
         joined
             .v
-            .extend_from_slice(&rows.v[rows.v.len() - rows.len().min(l) * 6..]);
+            .extend_from_slice(&rows.v[rows.v.len() - rows.len().min(l) * VW..]);
         self.tail = last_rows(joined, l, self.p);
         self.count += n;
     }
@@ -448,8 +549,19 @@ impl ResidualPass {
     fn extend_head(&mut self, rows: &Rows) {
         let take = (self.options.max_lag - self.head.len()).min(rows.len());
         self.head.x.extend_from_slice(&rows.x[..take * self.p]);
-        self.head.v.extend_from_slice(&rows.v[..take * 6]);
+        self.head.v.extend_from_slice(&rows.v[..take * VW]);
     }
+}
+
+/// (B M B)_dd = Σ_pq B_dp M_pq B_qd for k × k row-major B (symmetric) and M.
+fn quadratic_diagonal(b: &[f64], m: &[f64], k: usize, d: usize) -> f64 {
+    let mut var = 0.0;
+    for p in 0..k {
+        for q in 0..k {
+            var += b[d * k + p] * m[p * k + q] * b[q * k + d];
+        }
+    }
+    var
 }
 
 /// The last `l` rows of `rows`.
@@ -460,7 +572,7 @@ fn last_rows(rows: Rows, l: usize, p: usize) -> Rows {
     }
     Rows {
         x: rows.x[(n - l) * p..].to_vec(),
-        v: rows.v[(n - l) * 6..].to_vec(),
+        v: rows.v[(n - l) * VW..].to_vec(),
     }
 }
 

@@ -202,7 +202,7 @@ pub fn score_addition(
     let sse_of = |cols: &[usize]| -> Result<f64, EstimateError> {
         if cols.is_empty() {
             let z = acc.r_column(acc.output_index(axis));
-            return Ok(dot(z, z));
+            return Ok(dot(&z, &z));
         }
         let (x, z) = compressed(acc, cols, axis);
         lstsq::solve(&x, &z, ALIAS_TOL)

@@ -85,14 +85,14 @@ pub(crate) fn solve(
 ) -> Result<MmrSolution, EstimateError> {
     let (weight, l, weighting) = weights(r, floor);
     let np = structure.params.len();
-    let m = acc.m();
+    let m = acc.rows();
     let mut g = Mat::<f64>::zeros(6 * m, np);
     let mut rhs = vec![0.0; 6 * m];
     for k in 0..6 {
         for (c, col) in structure.columns.iter().enumerate() {
             let lik = l[col.axis as usize][k];
             if lik != 0.0 {
-                for (i, &rv) in acc.r_column(c).iter().enumerate().take(c + 1) {
+                for (i, rv) in acc.r_column(c).into_iter().enumerate() {
                     g[(k * m + i, col.param)] += lik * rv;
                 }
             }
@@ -100,7 +100,7 @@ pub(crate) fn solve(
         for (a, &axis) in crate::sample::Axis::ALL.iter().enumerate() {
             let lak = l[a][k];
             let zc = acc.output_index(axis);
-            for (i, &rv) in acc.r_column(zc).iter().enumerate().take(zc + 1) {
+            for (i, rv) in acc.r_column(zc).into_iter().enumerate() {
                 rhs[k * m + i] += lak * rv;
             }
         }

@@ -1,7 +1,7 @@
 //! The seed's two-step estimation (§5), from one pass of mergeable statistics
 //! ([`crate::stats::Accumulator`]):
 //!
-//! 1. per axis: OLS on all columns ([`ols`]) and the FSOA R² tables ([`fsoa`],
+//! 1. per axis: OLS on all columns ([`ols`]) and the FSOA R² tables ([`mod@fsoa`],
 //!    Algorithm 1, Tables 2–3), residual variances σ̂²;
 //! 2. the residual covariance R (6 × 6) of the per-axis fits weights the multivariate
 //!    multiple regression of Eq. 24 ([`mmr`]), with σ, t₀ and P-values

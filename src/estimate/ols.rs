@@ -24,6 +24,9 @@ pub struct AxisOls {
     pub theta: Vec<f64>,
     /// Standard errors √(σ̂² (XᵀX)⁻¹_jj), white-residual assumption.
     pub std_error: Vec<f64>,
+    /// (XᵀX)⁻¹ over the kept columns, row-major; the white-residual covariance of θ̂ is
+    /// σ̂² (XᵀX)⁻¹.
+    pub xtx_inv: Vec<f64>,
     /// Residual sum of squares, (N or N m)².
     pub sse: f64,
     /// Residual variance σ̂² = SSE / (N − p_i), (N or N m)². The seed divides by N − 1;
@@ -53,11 +56,10 @@ pub(crate) fn term_name(structure: &ModelStructure, column: usize) -> String {
     format!("{} ({})", structure.params[c.param].name, c.label)
 }
 
-/// The compressed design R[:, cols] (m × k) and target R[:, z_axis] of a column subset.
+/// The compressed design F[:, cols] (q × k) and target F[:, z_axis] of a column subset.
 pub(crate) fn compressed(acc: &Accumulator, cols: &[usize], axis: Axis) -> (Mat<f64>, Vec<f64>) {
-    let m = acc.m();
-    let x = Mat::from_fn(m, cols.len(), |i, j| acc.r(i, cols[j]));
-    let z = acc.r_column(acc.output_index(axis)).to_vec();
+    let x = Mat::from_fn(acc.rows(), cols.len(), |i, j| acc.r(i, cols[j]));
+    let z = acc.r_column(acc.output_index(axis));
     (x, z)
 }
 
@@ -92,6 +94,7 @@ pub fn axis_ols(
                 .map(|j| (residual_variance * ls.xtx_inv[j * k + j]).sqrt())
                 .collect(),
             theta: ls.theta,
+            xtx_inv: ls.xtx_inv,
             sse: ls.sse,
             residual_variance,
             dof,
