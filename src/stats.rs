@@ -412,22 +412,56 @@ impl Accumulator {
     /// A\[:, S\] = Q R\[:, S\]. Outputs, count and moments carry over unchanged.
     pub fn select(&self, columns: &[usize]) -> Accumulator {
         let m = self.m();
+        let q = self.rows();
         let keep: Vec<usize> = columns.iter().copied().chain(self.p..m).collect();
-        let k = keep.len();
+        // New shapes: the old shapes the kept columns use, each stored as the data of the
+        // first kept column with that shape (its factor f0 rescales the old shape).
+        let mut old_of_new: Vec<(usize, f64)> = Vec::new();
+        let mut representative = Vec::new();
+        let shape: Vec<(usize, f64)> = keep
+            .iter()
+            .enumerate()
+            .map(|(new_j, &j)| {
+                let (u, f) = self.shape[j];
+                match old_of_new.iter().position(|&(ou, _)| ou == u) {
+                    Some(v) => (v, f / old_of_new[v].1),
+                    None => {
+                        old_of_new.push((u, f));
+                        representative.push(new_j);
+                        (old_of_new.len() - 1, 1.0)
+                    }
+                }
+            })
+            .collect();
+        let k = old_of_new.len();
         let r = STACKED.with_borrow_mut(|s| {
-            s.a.resize_with(m, k, |_, _| 0.0);
-            for (dst, &j) in keep.iter().enumerate() {
-                s.a.col_as_slice_mut(dst)
-                    .copy_from_slice(&self.r[j * m..(j + 1) * m]);
+            s.a.resize_with(q, k, |_, _| 0.0);
+            for (dst, &(u, f0)) in old_of_new.iter().enumerate() {
+                let src = &self.r[u * q..(u + 1) * q];
+                for (d, v) in s.a.col_as_slice_mut(dst).iter_mut().zip(src) {
+                    *d = f0 * v;
+                }
             }
-            triangular_factor(s, m, k)
+            triangular_factor(s, q, k)
         });
+        let scaled = |u: usize, f0: f64, lower: bool| {
+            let (lo, hi) = (f0 * self.min[u], f0 * self.max[u]);
+            if (f0 >= 0.0) == lower { lo } else { hi }
+        };
         Accumulator {
             p: columns.len(),
+            shape,
+            representative,
             r,
             count: self.count,
-            min: keep.iter().map(|&j| self.min[j]).collect(),
-            max: keep.iter().map(|&j| self.max[j]).collect(),
+            min: old_of_new
+                .iter()
+                .map(|&(u, f0)| scaled(u, f0, true))
+                .collect(),
+            max: old_of_new
+                .iter()
+                .map(|&(u, f0)| scaled(u, f0, false))
+                .collect(),
             out_mean: self.out_mean,
             out_m2: self.out_m2,
             labels: keep.iter().map(|&j| self.labels[j].clone()).collect(),
