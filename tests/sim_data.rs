@@ -13,21 +13,24 @@ fn regenerate(opts: SimulateOptions, shipped: &str) {
     assert!(bytes == expected, "{shipped} differs from its regeneration");
 }
 
-#[test]
-fn quad_x_sweep_is_regenerated_exactly() {
-    regenerate(
-        SimulateOptions {
-            vehicle: VehicleChoice::File(PathBuf::from("data/vehicles/quad_x.toml")),
-            rotor_file: None,
-            mode: Mode::Sweep {
-                design: Design::LatinHypercube,
-                points: 2000,
-            },
-            effects: vec![],
-            seed: 1,
+fn sweep_options(vehicle: &str, seed: u64) -> SimulateOptions {
+    SimulateOptions {
+        vehicle: VehicleChoice::File(PathBuf::from(format!("data/vehicles/{vehicle}.toml"))),
+        rotor_file: None,
+        mode: Mode::Sweep {
+            design: Design::LatinHypercube,
+            points: 2000,
         },
-        "data/quad_x_sweep.csv",
-    );
+        effects: vec![],
+        seed,
+    }
+}
+
+#[test]
+fn sweeps_are_regenerated_exactly() {
+    regenerate(sweep_options("quad_x", 1), "data/quad_x_sweep.csv");
+    regenerate(sweep_options("quad_plus", 2), "data/quad_plus_sweep.csv");
+    regenerate(sweep_options("hexa_x", 3), "data/hexa_x_sweep.csv");
 }
 
 #[test]

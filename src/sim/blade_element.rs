@@ -458,3 +458,36 @@ impl BladeElementRotor {
         self.loads_at_inflow(kin, nu, false)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials_exactly() {
+        // 8 points are exact to degree 15: ∫_0.1^1 r^15 dr = (1 − 0.1^16)/16.
+        let nodes = gauss_legendre(8, 0.1, 1.0);
+        let integral: f64 = nodes.iter().map(|(x, w)| w * x.powi(15)).sum();
+        assert!((integral - (1.0 - 0.1f64.powi(16)) / 16.0).abs() < 1e-14);
+        let total: f64 = nodes.iter().map(|(_, w)| w).sum();
+        assert!((total - 0.9).abs() < 1e-14);
+    }
+
+    #[test]
+    fn airfoil_polar_is_continuous_at_stall_and_flat_plate_at_90_degrees() {
+        let a = Airfoil {
+            lift_slope: 5.7,
+            cd0: 0.011,
+            cd2: 0.9,
+            stall_angle: 0.26,
+            cd_flat_plate: 1.8,
+        };
+        let (below, above) = (a.coefficients(0.26 - 1e-9), a.coefficients(0.26 + 1e-9));
+        assert!((below.0 - above.0).abs() < 1e-7 && (below.1 - above.1).abs() < 1e-7);
+        let (cl90, cd90) = a.coefficients(std::f64::consts::FRAC_PI_2);
+        assert!(cl90.abs() < 1e-12 && (cd90 - 1.8).abs() < 1e-12);
+        // Odd lift, even drag.
+        let (p, m) = (a.coefficients(0.4), a.coefficients(-0.4));
+        assert!((p.0 + m.0).abs() < 1e-12 && (p.1 - m.1).abs() < 1e-12);
+    }
+}

@@ -77,6 +77,16 @@ pub struct FlightSummary {
     pub min_height: f64,
 }
 
+impl FlightSummary {
+    fn record(&mut self, tilt: f64, position_error: f64, speed: f64, rate: f64, height: f64) {
+        self.max_tilt = self.max_tilt.max(tilt);
+        self.max_position_error = self.max_position_error.max(position_error);
+        self.max_speed = self.max_speed.max(speed);
+        self.max_rate = self.max_rate.max(rate);
+        self.min_height = self.min_height.min(height);
+    }
+}
+
 /// A flown and logged flight.
 #[derive(Debug, Clone)]
 pub struct FlightLog {
@@ -221,9 +231,63 @@ impl Dynamics<'_> {
     }
 }
 
-/// Flies `model` for `config` with seed `seed`; an error says when and how the flight
-/// diverged (tilt beyond 90°, ground contact, or 50 s² m from the reference).
-pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<FlightLog, String> {
+/// Work vectors of one RK4 step.
+struct Rk4Scratch {
+    k2: Vec<f64>,
+    k3: Vec<f64>,
+    k4: Vec<f64>,
+    tmp: Vec<f64>,
+    omega_dot: Vec<f64>,
+}
+
+impl Rk4Scratch {
+    fn new(len: usize) -> Self {
+        Self {
+            k2: vec![0.0; len],
+            k3: vec![0.0; len],
+            k4: vec![0.0; len],
+            tmp: vec![0.0; len],
+            omega_dot: vec![0.0; len - 13],
+        }
+    }
+}
+
+impl Dynamics<'_> {
+    /// One classical RK4 step of length `h` (s) from `x` with slope `k1` at `x`, the
+    /// rotor command held; renormalises the quaternion.
+    // The stage arrays are indexed together; an index loop reads as the textbook formula.
+    #[allow(clippy::needless_range_loop)]
+    fn rk4_step(
+        &self,
+        x: &mut [f64],
+        cmd: &[f64],
+        k1: &[f64],
+        h: f64,
+        inflow: &mut [InflowState],
+        s: &mut Rk4Scratch,
+    ) {
+        for i in 0..x.len() {
+            s.tmp[i] = x[i] + 0.5 * h * k1[i];
+        }
+        self.derivative(&s.tmp, cmd, inflow, &mut s.k2, &mut s.omega_dot);
+        for i in 0..x.len() {
+            s.tmp[i] = x[i] + 0.5 * h * s.k2[i];
+        }
+        self.derivative(&s.tmp, cmd, inflow, &mut s.k3, &mut s.omega_dot);
+        for i in 0..x.len() {
+            s.tmp[i] = x[i] + h * s.k3[i];
+        }
+        self.derivative(&s.tmp, cmd, inflow, &mut s.k4, &mut s.omega_dot);
+        for i in 0..x.len() {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * s.k2[i] + 2.0 * s.k3[i] + s.k4[i]);
+        }
+        let norm = x[6..10].iter().map(|c| c * c).sum::<f64>().sqrt();
+        x[6..10].iter_mut().for_each(|c| *c /= norm);
+    }
+}
+
+/// Integration steps per log period; refuses periods that are not a whole number of steps.
+fn steps_per_log(config: &FlightConfig) -> Result<usize, String> {
     if !(config.step > 0.0 && config.duration > 0.0 && config.log_rate > 0.0) {
         return Err("flight: duration, step and log rate must be > 0".into());
     }
@@ -234,7 +298,27 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
             config.log_rate, config.step
         ));
     }
-    let ratio = ratio as usize;
+    Ok(ratio as usize)
+}
+
+/// Aerodynamic torque of one rotor in still-air hover, N m (for the allocation k_Q).
+fn hover_torque(model: &TruthModel) -> f64 {
+    let kin = super::blade_element::RotorKinematics {
+        omega: model.hover_omega,
+        spin: 1.0,
+        hub_velocity: [0.0; 3],
+        body_rates: [0.0; 3],
+    };
+    -model
+        .rotor
+        .loads(&kin, &model.inflow, &mut InflowState::default())
+        .moment[2]
+}
+
+/// Flies `model` for `config` with seed `seed`; an error says when and how the flight
+/// diverged (tilt beyond 90°, ground contact, or 50 s² m from the reference).
+pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<FlightLog, String> {
+    let ratio = steps_per_log(config)?;
     let vehicle = &model.vehicle;
     let n = vehicle.rotor_count();
     let mut rng = StdRng::seed_from_u64(seed);
@@ -249,22 +333,10 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         wind: Vector3::new(wind[0], wind[1], wind[2]),
     };
     let mut inflow = model.inflow_states();
-    let hover_torque = {
-        let kin = super::blade_element::RotorKinematics {
-            omega: model.hover_omega,
-            spin: 1.0,
-            hub_velocity: [0.0; 3],
-            body_rates: [0.0; 3],
-        };
-        -model
-            .rotor
-            .loads(&kin, &model.inflow, &mut InflowState::default())
-            .moment[2]
-    };
     let controller = Controller::new(
         vehicle,
         model.hover_omega,
-        hover_torque,
+        hover_torque(model),
         Gains::for_time_scale(manoeuvre.scale),
     );
     let r0 = manoeuvre.reference(0.0);
@@ -284,13 +356,8 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
     let mut history: Vec<f64> = Vec::with_capacity((steps + 1) * 2 * n);
     let mut cmd = vec![0.0; n];
     let mut omega_dot = vec![0.0; n];
-    let (mut k1, mut k2, mut k3, mut k4) = (
-        vec![0.0; 13 + n],
-        vec![0.0; 13 + n],
-        vec![0.0; 13 + n],
-        vec![0.0; 13 + n],
-    );
-    let mut tmp = vec![0.0; 13 + n];
+    let mut k1 = vec![0.0; 13 + n];
+    let mut scratch = Rk4Scratch::new(13 + n);
     let mut sample = Sample {
         omega: vec![0.0; n],
         omega_dot: vec![0.0; n],
@@ -311,11 +378,7 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         // Extremes and divergence checks.
         let tilt = rot.matrix()[(2, 2)].clamp(-1.0, 1.0).acos();
         let err = (reference.position - pos).norm();
-        summary.max_tilt = summary.max_tilt.max(tilt);
-        summary.max_position_error = summary.max_position_error.max(err);
-        summary.max_speed = summary.max_speed.max(v_ned.norm());
-        summary.max_rate = summary.max_rate.max(rates.norm());
-        summary.min_height = summary.min_height.min(-x[2]);
+        summary.record(tilt, err, v_ned.norm(), rates.norm(), -x[2]);
         let l = manoeuvre.scale * manoeuvre.scale;
         if !(tilt < std::f64::consts::FRAC_PI_2
             && err < 50.0 * l
@@ -350,25 +413,7 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         if step == steps {
             break;
         }
-        // RK4 with the command held over the step.
-        let h = config.step;
-        for i in 0..x.len() {
-            tmp[i] = x[i] + 0.5 * h * k1[i];
-        }
-        dynamics.derivative(&tmp, &cmd, &mut inflow, &mut k2, &mut omega_dot);
-        for i in 0..x.len() {
-            tmp[i] = x[i] + 0.5 * h * k2[i];
-        }
-        dynamics.derivative(&tmp, &cmd, &mut inflow, &mut k3, &mut omega_dot);
-        for i in 0..x.len() {
-            tmp[i] = x[i] + h * k3[i];
-        }
-        dynamics.derivative(&tmp, &cmd, &mut inflow, &mut k4, &mut omega_dot);
-        for i in 0..x.len() {
-            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        }
-        let norm = (x[6] * x[6] + x[7] * x[7] + x[8] * x[8] + x[9] * x[9]).sqrt();
-        x[6..10].iter_mut().for_each(|c| *c /= norm);
+        dynamics.rk4_step(&mut x, &cmd, &k1, config.step, &mut inflow, &mut scratch);
     }
     let mut table = LogTable::from_chunk(&samples, !config.imu_only);
     for (k, name) in ["ax", "ay", "az"].iter().enumerate() {

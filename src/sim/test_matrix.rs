@@ -83,7 +83,8 @@ impl Ranges {
 /// Samples `points` test points with `design` and seed `seed`, and evaluates the truth
 /// wrench at each. The chunk carries Ω̇ (and `height` with ground effect); `t` is the
 /// test-point number (s, 0, 1, 2, …) so the file satisfies the strictly increasing time
-/// of the data contract.
+/// of the data contract. Points are drawn sequentially from the seed, then evaluated on
+/// all available cores; the output does not depend on the core count.
 pub fn sweep(
     model: &TruthModel,
     ranges: &Ranges,
@@ -105,43 +106,86 @@ pub fn sweep(
         Design::Uniform => uniform_unit(&mut rng, points, intervals.len()),
         Design::LatinHypercube => latin_hypercube(&mut rng, points, intervals.len()),
     };
+    let dims = intervals.len();
+    let scaled: Vec<f64> = unit
+        .chunks_exact(dims)
+        .flat_map(|row| {
+            row.iter()
+                .zip(&intervals)
+                .map(|(u, (lo, hi))| lo + u * (hi - lo))
+        })
+        .collect();
+    let has_height = ranges.height.is_some();
+    let wrenches = evaluate_parallel(model, &scaled, dims, has_height);
     let mut chunk = SampleChunk::with_capacity(n_rotors, points, true);
-    let mut inflow = model.inflow_states();
     let mut s = Sample {
         omega: vec![0.0; n_rotors],
         omega_dot: vec![0.0; n_rotors],
         ..Default::default()
     };
-    for (k, row) in unit.chunks_exact(intervals.len()).enumerate() {
-        let x: Vec<f64> = row
-            .iter()
-            .zip(&intervals)
-            .map(|(u, (lo, hi))| lo + u * (hi - lo))
-            .collect();
+    for (k, (x, wrench)) in scaled.chunks_exact(dims).zip(wrenches).enumerate() {
+        fill_sample(&mut s, x, n_rotors, has_height);
         s.t = k as f64;
-        s.velocity = [x[0], x[1], x[2]];
-        s.rates = [x[3], x[4], x[5]];
-        s.omega.copy_from_slice(&x[6..6 + n_rotors]);
-        s.omega_dot
-            .copy_from_slice(&x[6 + n_rotors..6 + 2 * n_rotors]);
-        s.height = ranges.height.map(|_| x[6 + 2 * n_rotors]);
-        // Independent test points: no warm start carried between them, so every point
-        // is reproducible on its own.
-        inflow.iter_mut().for_each(|st| st.nu = None);
-        s.wrench = model.wrench(
-            &TruthInput {
-                velocity: s.velocity,
-                rates: s.rates,
-                omega: &s.omega,
-                omega_dot: &s.omega_dot,
-                height: s.height,
-                down_row: None,
-            },
-            &mut inflow,
-        );
+        s.wrench = wrench;
         chunk.push(&s);
     }
     chunk
+}
+
+/// Unpacks one row of scaled variables [u, v, w, p, q, r, Ω.., Ω̇.., (height)] into `s`.
+fn fill_sample(s: &mut Sample, x: &[f64], n_rotors: usize, has_height: bool) {
+    s.velocity = [x[0], x[1], x[2]];
+    s.rates = [x[3], x[4], x[5]];
+    s.omega.copy_from_slice(&x[6..6 + n_rotors]);
+    s.omega_dot
+        .copy_from_slice(&x[6 + n_rotors..6 + 2 * n_rotors]);
+    s.height = has_height.then(|| x[6 + 2 * n_rotors]);
+}
+
+/// Truth wrench of every row, split over the available cores. Rows are independent (no
+/// inflow warm start is carried between them), so the result does not depend on the
+/// split.
+fn evaluate_parallel(
+    model: &TruthModel,
+    rows: &[f64],
+    dims: usize,
+    has_height: bool,
+) -> Vec<[f64; 6]> {
+    let n_rows = rows.len() / dims;
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(n_rows.max(1));
+    let per = n_rows.div_ceil(threads.max(1)).max(1);
+    let n_rotors = model.vehicle.rotor_count();
+    let mut out = vec![[0.0; 6]; n_rows];
+    std::thread::scope(|scope| {
+        for (block, dst) in rows.chunks(per * dims).zip(out.chunks_mut(per)) {
+            scope.spawn(move || {
+                let mut inflow = model.inflow_states();
+                let mut s = Sample {
+                    omega: vec![0.0; n_rotors],
+                    omega_dot: vec![0.0; n_rotors],
+                    ..Default::default()
+                };
+                for (x, w) in block.chunks_exact(dims).zip(dst) {
+                    fill_sample(&mut s, x, n_rotors, has_height);
+                    inflow.iter_mut().for_each(|st| st.nu = None);
+                    *w = model.wrench(
+                        &TruthInput {
+                            velocity: s.velocity,
+                            rates: s.rates,
+                            omega: &s.omega,
+                            omega_dot: &s.omega_dot,
+                            height: s.height,
+                            down_row: None,
+                        },
+                        &mut inflow,
+                    );
+                }
+            });
+        }
+    });
+    out
 }
 
 /// `points × dims` independent U(0, 1) draws, row-major.
