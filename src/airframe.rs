@@ -4,6 +4,12 @@
 //! is evaluated on its own at its local hub velocity (Eq. 18, Assumption 4), its force
 //! (Eq. 13) and moment (Eq. 11–12) are carried to the CG and summed (Eq. 14–16). No
 //! virtual actuator or lumped parameter is used here.
+//!
+//! One sign differs from the seed: the hub rolling and pitching moments enter as
+//! σ(ℛ, −𝒫) where Eq. 11 prints σ(−ℛ, 𝒫). For σ = +1 (clockwise seen from above) in
+//! forward flight the advancing blade is on the left, so its extra lift rolls the
+//! vehicle right (M_x > 0), while Eq. 11 with Eq. 5d gives M_x < 0. The crate's
+//! blade-element simulator confirms the corrected sign (`tests/sim_rotor.rs`).
 
 use crate::rotor::BladeConstants;
 use crate::vehicle::Vehicle;
@@ -34,7 +40,9 @@ pub fn closed_form_wrench(
         let l = blade.loads(props.air_density, props.rotor_radius, omega[i], v_hub, nu0);
         let force = [-l.hub_force, l.side_force, -l.thrust];
         let s = rotor.spin;
-        let rotor_moment = [-s * l.rolling_moment, s * l.pitching_moment, -s * l.torque];
+        // Eq. 11 prints σ(−ℛ, 𝒫, −𝒬); the hub rolling and pitching moments take the
+        // opposite sign (see the `rotor` module docs), so σ(ℛ, −𝒫, −𝒬).
+        let rotor_moment = [s * l.rolling_moment, -s * l.pitching_moment, -s * l.torque];
         let arm = cross(vehicle.hub_position(i), force);
         let jz = props.rotor_inertia;
         let motor = [

@@ -24,9 +24,17 @@
 //! - Eq. 8f lists `C_Q_mu_muw μ μ_w` twice; in the multirotor sum every term of C_Q that
 //!   does not vary from rotor to rotor cancels (Σσ_i = 0), so only the μ_w-dependent
 //!   terms reach Eq. 22f.
-//! - In Eq. 22, C_R_mub and C_T0 have the same value K in this derivation and C_Q_mu0
-//!   also equals K; they stay separate parameters because the lumped model absorbs
-//!   effects (airframe, Assumption 3) that break these equalities.
+//! - The hub rolling and pitching moments of Eq. 5d–e, carried to the airframe by
+//!   Eq. 11 as printed (σ(−ℛ, 𝒫)), have the wrong sign: for σ = +1 in forward flight the
+//!   advancing blade is on the left and rolls the vehicle right (M_x > 0), where the
+//!   printed form gives M_x < 0. Blade-element integration in the crate's simulator
+//!   agrees with the physical sign to 0.1 %, and so does the seed's own Table 5, whose
+//!   fitted C_Rμb (−1.12e-2) has the opposite sign to C_T0 (1.54e-2). The crate
+//!   transmits σ(ℛ, −𝒫) (see [`crate::airframe`]), so C_R_mub = −K here; the Eq. 22
+//!   regressors are unchanged.
+//! - In Eq. 22, |C_R_mub|, C_T0 and C_Q_mu0 all equal K in this derivation; they stay
+//!   separate parameters because the lumped model absorbs effects (airframe,
+//!   Assumption 3) that break these equalities.
 
 use std::f64::consts::PI;
 
@@ -138,7 +146,8 @@ impl BladeConstants {
             ("C_T_mu", cs * self.c_nu_mu / 2.0),
             ("C_T_mu2", g),
             ("C_T_muw", cs * one_minus_cw / 2.0),
-            ("C_R_mub", k),
+            // Negative: the hub rolling moment opposes the printed Eq. 11 sign (module docs).
+            ("C_R_mub", -k),
             ("C_Q0", drag / 4.0),
             ("C_Q_mu0", k),
             ("C_Q_mu", k * self.c_nu_mu),

@@ -107,8 +107,8 @@ fn per_rotor_loads_agree_with_eq5_at_small_advance_ratio() {
     }
 }
 
-/// Airframe sum against `closed_form_wrench`, corrected only for the rolling/pitching
-/// moment sign found above (+2σℛ on M_x, −2σ𝒫 on M_y per rotor), at small advance ratios
+/// Airframe sum against `closed_form_wrench` (which transmits the hub rolling/pitching
+/// moments with the physical sign found above, σ(ℛ, −𝒫)), at small advance ratios
 /// and body rates (|p|, |q| ≤ 0.5 rad/s, |r| ≤ 0.3 rad/s, so ω × r along the blade, which
 /// Eq. 5 lacks, stays below 0.3 % of the tip speed). Tolerances (RMS difference over RMS
 /// of the axis): F_z and the moments 2 % (small-angle error of T and Q, as above), F_x and
@@ -117,7 +117,6 @@ fn per_rotor_loads_agree_with_eq5_at_small_advance_ratio() {
 fn airframe_wrench_agrees_with_closed_form_sum() {
     let v = quad_x();
     let (m, bc) = closed_form_like_model(&v);
-    let nu0 = v.hover_induced_velocity();
     let mut rng = StdRng::seed_from_u64(7);
     let (mut err, mut refv) = (vec![Vec::new(); 6], vec![Vec::new(); 6]);
     let mut inflow = m.inflow_states();
@@ -148,19 +147,7 @@ fn airframe_wrench_agrees_with_closed_form_sum() {
             },
             &mut inflow,
         );
-        let mut cf = closed_form_wrench(&v, &bc, vel, rates, &omega, &omega_dot);
-        for (i, r) in v.rotors().iter().enumerate() {
-            let v_hub = [vel[0], vel[1], vel[2] + rates[0] * r.y - rates[1] * r.x];
-            let l = bc.loads(
-                v.props.air_density,
-                v.props.rotor_radius,
-                omega[i],
-                v_hub,
-                nu0,
-            );
-            cf[3] += 2.0 * r.spin * l.rolling_moment;
-            cf[4] -= 2.0 * r.spin * l.pitching_moment;
-        }
+        let cf = closed_form_wrench(&v, &bc, vel, rates, &omega, &omega_dot);
         for j in 0..6 {
             err[j].push(bem[j] - cf[j]);
             refv[j].push(cf[j]);
