@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::{ModelError, ModelOptions, ModelStructure, Workspace};
+use crate::model::{Column, ModelError, ModelOptions, ModelStructure, Parameter, Workspace};
 use crate::sample::{Axis, Sample, SampleChunk};
 use crate::vehicle::{Vehicle, VehicleDefinition, VehicleSource};
 
@@ -32,7 +32,19 @@ struct ModelFile {
     schema_version: u32,
     vehicle: VehicleDefinition,
     model: ModelOptions,
+    /// Parameters beyond Eq. 22 (effects added by the diagnosis), with their columns.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    extra: Vec<ExtraParameter>,
     parameters: Vec<ParameterEstimate>,
+}
+
+/// A parameter added to the Eq. 22 structure, stored with its regressor columns.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExtraParameter {
+    name: String,
+    unit: String,
+    columns: Vec<Column>,
 }
 
 /// A model file that could not be read or written.
@@ -102,7 +114,16 @@ impl IdentifiedModel {
         let vehicle =
             Vehicle::from_definition(file.vehicle, VehicleSource::File(path.to_path_buf()))
                 .map_err(|e| err(format!("[vehicle]: {}", e.kind)))?;
-        let structure = ModelStructure::eq22(&vehicle, file.model);
+        let mut structure = ModelStructure::eq22(&vehicle, file.model);
+        for x in file.extra {
+            structure.add_parameter(
+                Parameter {
+                    name: x.name,
+                    unit: x.unit,
+                },
+                x.columns,
+            );
+        }
         let names: Vec<&str> = structure.params.iter().map(|p| p.name.as_str()).collect();
         let stored: Vec<&str> = file.parameters.iter().map(|p| p.name.as_str()).collect();
         if names != stored {
@@ -131,10 +152,27 @@ impl IdentifiedModel {
             path: path.to_path_buf(),
             message,
         };
+        let base = ModelStructure::eq22(&self.vehicle, self.structure.options)
+            .params
+            .len();
+        let extra = (base..self.structure.params.len())
+            .map(|p| ExtraParameter {
+                name: self.structure.params[p].name.clone(),
+                unit: self.structure.params[p].unit.clone(),
+                columns: self
+                    .structure
+                    .columns
+                    .iter()
+                    .filter(|c| c.param == p)
+                    .cloned()
+                    .collect(),
+            })
+            .collect();
         let file = ModelFile {
             schema_version: MODEL_FILE_VERSION,
             vehicle: self.vehicle.definition(),
             model: self.structure.options,
+            extra,
             parameters: self.parameters.clone(),
         };
         let text = toml::to_string(&file).map_err(|e| err(e.to_string()))?;

@@ -23,6 +23,7 @@ pub mod identified;
 pub mod io;
 pub mod mixing;
 pub mod model;
+pub mod pipeline;
 pub mod report;
 pub mod rotor;
 pub mod sample;

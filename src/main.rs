@@ -1,9 +1,12 @@
 //! The `mrsysid` command-line tool: a thin shell over the library.
 
+mod commands;
+
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use mrsysid::model::{InflowCorrection, ModelOptions, RotorInertiaTerms};
 use mrsysid::sim::Effect;
 use mrsysid::sim::flight::FlightConfig;
 use mrsysid::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate_to_file};
@@ -19,8 +22,131 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Identify the Eq. 22 model from logs: FSOA tables, MMR estimates, fit metrics on
+    /// held-out data, residual diagnostics, and the effects the model lacks.
+    #[command(after_help = FIT_EXAMPLES)]
+    Fit(FitArgs),
+    /// Like `fit`, but print only the closing-the-loop diagnosis.
+    Diagnose(FitArgs),
+    /// Predict force and moment per sample of a log with a saved model (CSV out).
+    Predict(PredictArgs),
+    /// NRMSE, TIC and R² of a saved model on logs it was not fitted to.
+    Validate(ValidateArgs),
     /// Generate truth data: a response-surface sweep or a flight log (CSV data contract).
     Simulate(SimulateArgs),
+}
+
+const FIT_EXAMPLES: &str = "Examples:
+  mrsysid fit data/quadx_sweep.csv --vehicle data/vehicles/quad_x.toml
+  mrsysid fit a.csv b.csv --vehicle v.toml --validate c.csv --json report.json --model-out model.toml --plots plots/
+  mrsysid fit log.csv --vehicle v.toml --mapping examples/neurobem.toml
+
+Exit codes: 0 success; 1 the fit failed or the data cannot support it; 2 bad input or usage.";
+
+#[derive(Clone, Copy, ValueEnum)]
+enum InflowArg {
+    /// From per-rotor sums (exact for any Assumption 2 layout and spin assignment).
+    Derived,
+    /// The seed's printed case table.
+    Paper,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum RotorInertiaArg {
+    /// J_z from the vehicle file, terms moved to the output side.
+    Known,
+    /// Estimate J_z as a parameter.
+    Estimated,
+    /// Leave the J_z terms out.
+    Neglected,
+}
+
+#[derive(clap::Args)]
+struct ModelArgs {
+    /// Vehicle TOML file.
+    #[arg(long)]
+    vehicle: PathBuf,
+    /// Mapping file (TOML) for logs that do not follow the CSV contract, and for MCAP.
+    #[arg(long)]
+    mapping: Option<PathBuf>,
+    /// Inflow-correction terms of Eq. 22.
+    #[arg(long, value_enum, default_value_t = InflowArg::Derived)]
+    inflow: InflowArg,
+    /// Leave out the terms linear in V_h (the seed's simulation-study variant).
+    #[arg(long)]
+    no_linear_vh: bool,
+    /// Treatment of the J_z gyroscopic and motor-torque terms.
+    #[arg(long, value_enum, default_value_t = RotorInertiaArg::Known)]
+    rotor_inertia: RotorInertiaArg,
+    /// Drop invalid samples (NaN, out of range, time going back) and count them,
+    /// instead of stopping at the first.
+    #[arg(long)]
+    drop_invalid: bool,
+}
+
+#[derive(clap::Args)]
+struct FitArgs {
+    /// Logs to fit (CSV contract, mapped CSV, or MCAP with --mapping).
+    #[arg(required = true)]
+    logs: Vec<PathBuf>,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Logs for the validation figures; without them every 5th 2-second segment of the
+    /// fit logs is held out.
+    #[arg(long, num_args = 1..)]
+    validate: Vec<PathBuf>,
+    /// Hold-out segment length, s (without --validate).
+    #[arg(long, default_value_t = 2.0)]
+    holdout_segment: f64,
+    /// Write the JSON report here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write the identified model (TOML) here.
+    #[arg(long)]
+    model_out: Option<PathBuf>,
+    /// Write plots (SVG and PNG) into this directory.
+    #[arg(long)]
+    plots: Option<PathBuf>,
+    /// Reader threads (default: available cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
+    /// Skip the residual diagnosis (closing the loop).
+    #[arg(long)]
+    no_diagnose: bool,
+}
+
+#[derive(clap::Args)]
+struct PredictArgs {
+    /// Model file written by `fit --model-out`.
+    #[arg(long)]
+    model: PathBuf,
+    /// Log to predict (CSV contract, mapped CSV, or MCAP with --mapping).
+    log: PathBuf,
+    /// Mapping file for logs that do not follow the CSV contract, and for MCAP.
+    #[arg(long)]
+    mapping: Option<PathBuf>,
+    /// Output CSV (t, fx, fy, fz, mx, my, mz); written whole or not at all.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct ValidateArgs {
+    /// Model file written by `fit --model-out`.
+    #[arg(long)]
+    model: PathBuf,
+    /// Logs the model was not fitted to.
+    #[arg(required = true)]
+    logs: Vec<PathBuf>,
+    /// Mapping file for logs that do not follow the CSV contract, and for MCAP.
+    #[arg(long)]
+    mapping: Option<PathBuf>,
+    /// Write the metrics as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -122,14 +248,58 @@ impl SimulateArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Fit(args) => commands::fit(&args.request(), false),
+        Command::Diagnose(args) => commands::fit(&args.request(), true),
+        Command::Predict(args) => {
+            commands::predict(&args.model, &args.log, args.mapping.as_deref(), &args.out)
+        }
+        Command::Validate(args) => commands::validate(
+            &args.model,
+            &args.logs,
+            args.mapping.as_deref(),
+            args.json.as_deref(),
+        ),
         Command::Simulate(args) => simulate_to_file(&args.options(), &args.out)
-            .map(|rows| eprintln!("wrote {rows} rows to {}", args.out.display())),
+            .map(|rows| eprintln!("wrote {rows} rows to {}", args.out.display()))
+            .map_err(|e| commands::Failure::input(e.to_string())),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
+            eprintln!("error: {}", e.message);
+            ExitCode::from(e.code)
+        }
+    }
+}
+
+impl FitArgs {
+    fn request(&self) -> commands::FitCommand {
+        let m = &self.model;
+        commands::FitCommand {
+            logs: self.logs.clone(),
+            vehicle: m.vehicle.clone(),
+            mapping: m.mapping.clone(),
+            options: ModelOptions {
+                inflow: match m.inflow {
+                    InflowArg::Derived => InflowCorrection::Derived,
+                    InflowArg::Paper => InflowCorrection::Paper,
+                },
+                linear_vh_terms: !m.no_linear_vh,
+                rotor_inertia: match m.rotor_inertia {
+                    RotorInertiaArg::Known => RotorInertiaTerms::Known,
+                    RotorInertiaArg::Estimated => RotorInertiaTerms::Estimated,
+                    RotorInertiaArg::Neglected => RotorInertiaTerms::Neglected,
+                },
+            },
+            drop_invalid: m.drop_invalid,
+            validate: self.validate.clone(),
+            holdout_segment: self.holdout_segment,
+            json: self.json.clone(),
+            model_out: self.model_out.clone(),
+            plots: self.plots.clone(),
+            threads: self.threads,
+            quiet: self.quiet,
+            diagnose: !self.no_diagnose,
         }
     }
 }

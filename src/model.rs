@@ -38,7 +38,9 @@ use crate::sample::{Axis, Sample, SampleChunk};
 use crate::vehicle::{ConfigurationClass, Vehicle};
 
 /// A per-sample quantity that regressor terms multiply.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 pub enum Signal {
     /// Body velocity u, m/s.
     U,
@@ -166,7 +168,8 @@ impl Signal {
 }
 
 /// One product `coef · Π factors` inside a regressor column.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Term {
     /// Constant coefficient (carries ρπR², R, N, ν0, ℓ, h as the column needs).
     pub coef: f64,
@@ -183,7 +186,8 @@ pub fn term(coef: f64, factors: &[Signal]) -> Term {
 }
 
 /// A regressor column: which axis, which parameter it multiplies, and its terms.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Column {
     /// Output axis.
     pub axis: Axis,

@@ -128,3 +128,61 @@ fn bad_model_files_name_the_file_and_problem() {
         "{missing}"
     );
 }
+
+#[test]
+fn added_effect_columns_survive_the_model_file() {
+    use mrsysid::model::{Column, Parameter, Signal, term};
+    use mrsysid::sample::Axis;
+    let m = model();
+    let mut s = m.structure.clone();
+    s.add_parameter(
+        Parameter {
+            name: "drag_area_x".into(),
+            unit: "m^2".into(),
+        },
+        vec![Column {
+            axis: Axis::Fx,
+            param: 0,
+            label: "-rho/2*u|u|".into(),
+            terms: vec![term(-0.6125, &[Signal::U, Signal::AbsU])],
+        }],
+    );
+    s.add_parameter(
+        Parameter {
+            name: "thrust_scale_2".into(),
+            unit: "-".into(),
+        },
+        vec![Column {
+            axis: Axis::Fz,
+            param: 0,
+            label: "T_2".into(),
+            terms: vec![term(-1e-6, &[Signal::RotorSpeedSquared(1)])],
+        }],
+    );
+    let mut theta = m.theta();
+    theta.extend([0.02, -0.08]);
+    let std = vec![0.0; theta.len()];
+    let aug = IdentifiedModel::new(m.vehicle.clone(), s, &theta, &std);
+    let path = tmp("augmented.toml");
+    aug.save(&path).unwrap();
+    let back = IdentifiedModel::load(&path).unwrap();
+    assert_eq!(back.parameters, aug.parameters);
+    let args = (
+        [12.0, 1.0, 0.5],
+        [0.2, 0.1, 0.0],
+        [900.0, 1000.0, 1100.0, 1200.0],
+        [0.0; 4],
+    );
+    let a = aug.predict(args.0, args.1, &args.2, &args.3).unwrap();
+    let b = back.predict(args.0, args.1, &args.2, &args.3).unwrap();
+    assert_eq!(a, b);
+    // The extra terms act: F_x gains −ρ/2 CdA u|u| = −0.6125·0.02·144 N.
+    let plain = m.predict(args.0, args.1, &args.2, &args.3).unwrap();
+    let expect = -0.6125 * 0.02 * 144.0;
+    assert!(
+        (a.0[0] - plain.0[0] - expect).abs() < 1e-9,
+        "{} vs {}",
+        a.0[0] - plain.0[0],
+        expect
+    );
+}

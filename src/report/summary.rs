@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::diagnose::{CandidateScore, Diagnosis};
 use crate::estimate::{AxisMetrics, Fit, ResidualDiagnostics};
 use crate::model::{ModelOptions, ModelStructure};
 use crate::sample::Axis;
@@ -49,6 +50,104 @@ pub struct Report {
     pub normality: Vec<NormalityRow>,
     /// Conditioning of every solve.
     pub identifiability: Vec<ConditioningRow>,
+    /// Closing the loop: effects the model lacked, added and checked on validation data
+    /// (absent with `--no-diagnose`).
+    pub diagnosis: Option<DiagnosisReport>,
+}
+
+/// The closing-the-loop result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosisReport {
+    /// Effects added, in order.
+    pub effects_added: Vec<EffectRow>,
+    /// Validation metrics before any effect was added.
+    pub before: Vec<AxisRow>,
+    /// Validation metrics of the final model.
+    pub after: Vec<AxisRow>,
+    /// Every step's ranked candidates.
+    pub steps: Vec<StepRow>,
+}
+
+/// An effect (candidate) with its estimates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectRow {
+    /// Effect name, e.g. `weak rotor 3`.
+    pub name: String,
+    /// Axes it acts on.
+    pub axes: Vec<Axis>,
+    /// Its parameters.
+    pub parameters: Vec<EffectParameterRow>,
+    /// Relative validation-NRMSE reduction per axis, Fx…Mz (positive = better).
+    pub validation_gain: Vec<f64>,
+    /// Smallest P-value of its parameters.
+    pub min_p: f64,
+    /// Why it was not added (empty for an accepted candidate).
+    pub rejected: String,
+}
+
+/// One estimated effect parameter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectParameterRow {
+    /// Parameter name.
+    pub name: String,
+    /// Estimate.
+    pub estimate: f64,
+    /// Standard deviation.
+    pub std: f64,
+    /// Unit.
+    pub unit: String,
+}
+
+/// One step of the diagnosis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StepRow {
+    /// Effect added in this step.
+    pub added: Option<String>,
+    /// Other kinds the data cannot tell apart from it.
+    pub look_alikes: Vec<String>,
+    /// Candidates, best first.
+    pub ranking: Vec<EffectRow>,
+}
+
+impl From<&CandidateScore> for EffectRow {
+    fn from(c: &CandidateScore) -> Self {
+        Self {
+            name: c.name.clone(),
+            axes: c.axes.clone(),
+            parameters: c
+                .parameters
+                .iter()
+                .map(|p| EffectParameterRow {
+                    name: p.name.clone(),
+                    estimate: p.estimate,
+                    std: p.std,
+                    unit: p.unit.clone(),
+                })
+                .collect(),
+            validation_gain: c.validation_gain.to_vec(),
+            min_p: c.min_p,
+            rejected: c.rejected.clone(),
+        }
+    }
+}
+
+impl From<&Diagnosis> for DiagnosisReport {
+    fn from(d: &Diagnosis) -> Self {
+        Self {
+            effects_added: d.effects_added.iter().map(EffectRow::from).collect(),
+            before: d.before.iter().map(AxisRow::from).collect(),
+            after: d.after.iter().map(AxisRow::from).collect(),
+            steps: d
+                .steps
+                .iter()
+                .map(|s| StepRow {
+                    added: s.added.map(|i| s.ranking[i].name.clone()),
+                    look_alikes: s.look_alikes.clone(),
+                    ranking: s.ranking.iter().map(EffectRow::from).collect(),
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Vehicle identification in the report.
@@ -178,6 +277,7 @@ impl Report {
         validation_samples: u64,
         validation_source: &str,
         diagnostics: Option<&ResidualDiagnostics>,
+        diagnosis: Option<&Diagnosis>,
     ) -> Self {
         let coloured = |name: &str| {
             diagnostics.and_then(|d| {
@@ -270,6 +370,7 @@ impl Report {
                     max_vif: c.vif.iter().max_by(|a, b| a.1.total_cmp(&b.1)).cloned(),
                 })
                 .collect(),
+            diagnosis: diagnosis.map(DiagnosisReport::from),
         }
     }
 }

@@ -6,7 +6,7 @@
 
 use std::fmt::Write;
 
-use super::summary::{FsoaReport, Report};
+use super::summary::{DiagnosisReport, FsoaReport, Report};
 
 /// All tables, as printed by `mrsysid fit`.
 pub fn render(report: &Report) -> String {
@@ -20,7 +20,107 @@ pub fn render(report: &Report) -> String {
     covariance_table(&mut out, report);
     normality_table(&mut out, report);
     identifiability(&mut out, report);
+    if let Some(d) = &report.diagnosis {
+        out.push_str(&render_diagnosis(d));
+    }
     out
+}
+
+/// The diagnosis tables: ranked candidates per step, effects added with their
+/// estimates, validation NRMSE/TIC/R² per axis before and after.
+pub fn render_diagnosis(d: &DiagnosisReport) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "Diagnosis: effects the Eq. 22 model lacks (scored on validation data)"
+    );
+    for (k, step) in d.steps.iter().enumerate() {
+        let _ = writeln!(
+            out,
+            "  step {}: {}",
+            k + 1,
+            step.added
+                .as_deref()
+                .map_or("nothing added".to_string(), |a| format!("added {a}"))
+        );
+        let _ = writeln!(
+            out,
+            "    {:<26} {:>9} {:>10}  verdict",
+            "candidate", "val gain", "min P"
+        );
+        for c in step.ranking.iter().take(8) {
+            let best = c
+                .validation_gain
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max);
+            let verdict = if c.rejected.is_empty() {
+                "accepted"
+            } else {
+                c.rejected.as_str()
+            };
+            let _ = writeln!(
+                out,
+                "    {:<26} {:>8.1}% {:>10.2e}  {verdict}",
+                c.name,
+                100.0 * best,
+                c.min_p
+            );
+        }
+        if !step.look_alikes.is_empty() {
+            let _ = writeln!(
+                out,
+                "    the data cannot tell {} apart from {}: both reported",
+                step.added.as_deref().unwrap_or("-"),
+                step.look_alikes.join(", ")
+            );
+        }
+    }
+    for e in &d.effects_added {
+        let axes: Vec<&str> = e.axes.iter().map(|a| a.name()).collect();
+        let _ = writeln!(out, "  effect: {} (axes {})", e.name, axes.join(", "));
+        for p in &e.parameters {
+            let _ = writeln!(
+                out,
+                "    {} = {}",
+                p.name,
+                with_unit(&p.name, p.estimate, p.std, &p.unit)
+            );
+        }
+    }
+    let _ = writeln!(
+        out,
+        "  validation {:>4} {:>12} {:>12} {:>8} {:>8} {:>8} {:>8}",
+        "axis", "NRMSE before", "NRMSE after", "TIC bef.", "TIC aft.", "R2 bef.", "R2 aft."
+    );
+    for (b, a) in d.before.iter().zip(&d.after) {
+        let _ = writeln!(
+            out,
+            "             {:>4} {:>11.2}% {:>11.2}% {:>8.3} {:>8.3} {:>7.1}% {:>7.1}%",
+            b.axis.name(),
+            100.0 * b.nrmse,
+            100.0 * a.nrmse,
+            b.tic,
+            a.tic,
+            100.0 * b.r2,
+            100.0 * a.r2
+        );
+    }
+    out.push('\n');
+    out
+}
+
+/// `estimate ± std unit`, in mm for lengths, ms for times and % for fractional changes
+/// (`*_scale`, `*_loss` parameters).
+fn with_unit(name: &str, x: f64, s: f64, unit: &str) -> String {
+    let fraction = name.contains("scale") || name.contains("loss");
+    match unit {
+        "-" if fraction => format!("{:+.2} ± {:.2} %", 100.0 * x, 100.0 * s),
+        "m" => format!("{:.2} ± {:.2} mm", 1e3 * x, 1e3 * s),
+        "-" => format!("{x:.4e} ± {s:.1e}"),
+        "s" => format!("{:.2} ± {:.2} ms", 1e3 * x, 1e3 * s),
+        u => format!("{x:.4e} ± {s:.1e} {u}"),
+    }
 }
 
 fn header(out: &mut String, r: &Report) {

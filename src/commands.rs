@@ -1,0 +1,384 @@
+//! The command handlers of the binary: read arguments, call the library, print and
+//! write outputs (each output file written whole or not at all).
+
+use std::path::{Path, PathBuf};
+
+use mrsysid::diagnose::DiagnoseOptions;
+use mrsysid::estimate::{self, FitOptions, ResidualDiagnostics};
+use mrsysid::identified::{IdentifiedModel, write_atomically};
+use mrsysid::io::{self, InvalidSamples, Mapping, ReadOptions};
+use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries, Validation};
+use mrsysid::report::plots::{self, AxisSeries, NormalProbability, ResidualDensity};
+use mrsysid::report::summary::{AxisRow, Report};
+use mrsysid::report::tables;
+use mrsysid::sample::Axis;
+use mrsysid::stats::Accumulator;
+use mrsysid::vehicle::Vehicle;
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// A failed command: message and process exit code (1 fit failed, 2 bad input).
+pub struct Failure {
+    pub code: u8,
+    pub message: String,
+}
+
+impl Failure {
+    pub fn input(message: String) -> Self {
+        Self { code: 2, message }
+    }
+
+    fn fit(message: String) -> Self {
+        Self { code: 1, message }
+    }
+}
+
+impl From<pipeline::PipelineError> for Failure {
+    fn from(e: pipeline::PipelineError) -> Self {
+        Self {
+            code: e.exit_code(),
+            message: e.to_string(),
+        }
+    }
+}
+
+/// Everything `fit` and `diagnose` take from the command line.
+pub struct FitCommand {
+    pub logs: Vec<PathBuf>,
+    pub vehicle: PathBuf,
+    pub mapping: Option<PathBuf>,
+    pub options: ModelOptions,
+    pub drop_invalid: bool,
+    pub validate: Vec<PathBuf>,
+    pub holdout_segment: f64,
+    pub json: Option<PathBuf>,
+    pub model_out: Option<PathBuf>,
+    pub plots: Option<PathBuf>,
+    pub threads: Option<usize>,
+    pub quiet: bool,
+    pub diagnose: bool,
+}
+
+fn read_options(drop_invalid: bool) -> ReadOptions {
+    ReadOptions {
+        invalid: if drop_invalid {
+            InvalidSamples::DropAndCount
+        } else {
+            InvalidSamples::Error
+        },
+        ..ReadOptions::default()
+    }
+}
+
+fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
+    path.map(|p| Mapping::from_toml_file(p).map_err(|e| Failure::input(e.to_string())))
+        .transpose()
+}
+
+/// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
+pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
+    let vehicle =
+        Vehicle::from_toml_file(&cmd.vehicle).map_err(|e| Failure::input(e.to_string()))?;
+    if !(cmd.holdout_segment.is_finite() && cmd.holdout_segment > 0.0) {
+        return Err(Failure::input(format!(
+            "--holdout-segment {} must be a positive number of seconds",
+            cmd.holdout_segment
+        )));
+    }
+    if let Some(dir) = &cmd.plots {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            Failure::input(format!(
+                "{}: cannot create plot directory: {e}",
+                dir.display()
+            ))
+        })?;
+    }
+    let structure = ModelStructure::eq22(&vehicle, cmd.options);
+    let request = FitRequest {
+        logs: cmd.logs.clone(),
+        vehicle: vehicle.clone(),
+        mapping: load_mapping(cmd.mapping.as_deref())?,
+        read: read_options(cmd.drop_invalid),
+        structure: structure.clone(),
+        fit: FitOptions::default(),
+        validation: if cmd.validate.is_empty() {
+            Validation::Holdout(Holdout {
+                segment_seconds: cmd.holdout_segment,
+                ..Holdout::default()
+            })
+        } else {
+            Validation::Logs(cmd.validate.clone())
+        },
+        threads: cmd
+            .threads
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+            .max(1),
+        second_pass: true,
+        diagnose: cmd.diagnose.then(DiagnoseOptions::default),
+    };
+    let out = pipeline::run(&request)?;
+    let report = Report::new(
+        &vehicle,
+        &structure,
+        &out.fit,
+        &out.validation,
+        out.validation_stats.count(),
+        &out.validation_source,
+        out.diagnostics.as_ref(),
+        out.diagnosis.as_ref(),
+    );
+    if !cmd.quiet {
+        print_reader_notes(&out);
+        match (&report.diagnosis, diagnosis_only) {
+            (Some(d), true) => print!("{}", tables::render_diagnosis(d)),
+            (None, true) => println!("diagnosis skipped (--no-diagnose)"),
+            (_, false) => print!("{}", tables::render(&report)),
+        }
+    }
+    if let Some(path) = &cmd.json {
+        let text =
+            serde_json::to_string_pretty(&report).map_err(|e| Failure::fit(e.to_string()))?;
+        write_atomically(path, text.as_bytes())
+            .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
+    }
+    if let Some(path) = &cmd.model_out {
+        identified(&vehicle, &structure, &out)
+            .save(path)
+            .map_err(|e| Failure::input(e.to_string()))?;
+    }
+    if let Some(dir) = &cmd.plots {
+        write_plots(dir, &out).map_err(|e| Failure::input(e.to_string()))?;
+    }
+    Ok(())
+}
+
+/// The model to save: the diagnosis' augmented model when it added effects.
+fn identified(vehicle: &Vehicle, structure: &ModelStructure, out: &FitOutcome) -> IdentifiedModel {
+    match &out.diagnosis {
+        Some(d) if !d.effects_added.is_empty() => {
+            IdentifiedModel::new(vehicle.clone(), d.structure.clone(), &d.theta, &d.std)
+        }
+        _ => {
+            let mut std = vec![0.0; structure.params.len()];
+            for (p, &i) in out.fit.mmr.parameters.iter().zip(&out.fit.mmr.param_index) {
+                std[i] = p.std_error;
+            }
+            IdentifiedModel::new(vehicle.clone(), structure.clone(), &out.fit.mmr.theta, &std)
+        }
+    }
+}
+
+fn print_reader_notes(out: &FitOutcome) {
+    for s in &out.summaries {
+        let dropped: u64 = s.dropped.values().sum();
+        let spikes: u64 = s.spikes.values().sum();
+        let mut notes = Vec::new();
+        if dropped > 0 {
+            notes.push(format!("{dropped} samples dropped {:?}", s.dropped));
+        }
+        if spikes > 0 {
+            notes.push(format!("{spikes} samples look like spikes {:?}", s.spikes));
+        }
+        if s.segments > 1 {
+            notes.push(format!("{} segments (gaps split the log)", s.segments));
+        }
+        notes.extend(s.unit_warnings.iter().cloned());
+        if !notes.is_empty() {
+            eprintln!("note: {}: {}", s.file, notes.join("; "));
+        }
+    }
+}
+
+fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
+    let series = |s: &PlotSeries| -> Vec<(Axis, Vec<f64>, Vec<f64>)> {
+        Axis::ALL
+            .iter()
+            .map(|&a| {
+                (
+                    a,
+                    s.measured[a as usize].clone(),
+                    s.predicted[a as usize].clone(),
+                )
+            })
+            .collect()
+    };
+    for (name, title, s) in [
+        (
+            "fit_time_histories",
+            "Fit data: measured vs model",
+            &out.fit_series,
+        ),
+        (
+            "validation_time_histories",
+            "Validation data: measured vs model",
+            &out.validation_series,
+        ),
+    ] {
+        if s.t.is_empty() {
+            continue;
+        }
+        let cols = series(s);
+        let axes: Vec<AxisSeries> = cols
+            .iter()
+            .map(|(axis, m, p)| AxisSeries {
+                axis: *axis,
+                t: &s.t,
+                measured: m,
+                predicted: p,
+            })
+            .collect();
+        plots::time_histories(&dir.join(name), title, &axes)?;
+    }
+    if let Some(d) = &out.diagnostics {
+        plots::residual_densities(
+            &dir.join("residual_density"),
+            "Residual probability density (fit data)",
+            &densities(d),
+        )?;
+        plots::normal_probability(
+            &dir.join("normal_probability"),
+            "Normal probability of residuals (fit data)",
+            &normal_points(d),
+        )?;
+    }
+    Ok(())
+}
+
+fn densities(d: &ResidualDiagnostics) -> Vec<ResidualDensity> {
+    d.axes
+        .iter()
+        .map(|a| {
+            let h = &a.histogram;
+            let bins = h.counts.len().max(1);
+            let width = (h.hi - h.lo) / bins as f64;
+            let total = d.samples.max(1) as f64;
+            ResidualDensity {
+                axis: a.axis,
+                edges: (0..=bins).map(|i| h.lo + width * i as f64).collect(),
+                density: h
+                    .counts
+                    .iter()
+                    .map(|&c| c as f64 / (total * width))
+                    .collect(),
+                mean: a.mean,
+                std: a.std_dev,
+            }
+        })
+        .collect()
+}
+
+/// Ordered residuals at 200 probability levels, read off the histogram's cumulative
+/// distribution, against standard-normal quantiles.
+fn normal_points(d: &ResidualDiagnostics) -> Vec<NormalProbability> {
+    let normal = Normal::standard();
+    d.axes
+        .iter()
+        .map(|a| {
+            let h = &a.histogram;
+            let n = (h.below + h.above + h.counts.iter().sum::<u64>()).max(1) as f64;
+            let width = (h.hi - h.lo) / h.counts.len().max(1) as f64;
+            let points = (1..=200)
+                .filter_map(|i| {
+                    let p = i as f64 / 201.0;
+                    let mut cum = h.below as f64;
+                    for (b, &c) in h.counts.iter().enumerate() {
+                        let next = cum + c as f64;
+                        if next / n >= p && c > 0 {
+                            let frac = (p * n - cum) / c as f64;
+                            return Some((normal.inverse_cdf(p), h.lo + width * (b as f64 + frac)));
+                        }
+                        cum = next;
+                    }
+                    None
+                })
+                .collect();
+            NormalProbability {
+                axis: a.axis,
+                points,
+                correlation: a.normal_probability_correlation,
+            }
+        })
+        .collect()
+}
+
+/// `mrsysid predict`: model output per sample of a log, as CSV.
+pub fn predict(
+    model: &Path,
+    log: &Path,
+    mapping: Option<&Path>,
+    out: &Path,
+) -> Result<(), Failure> {
+    let m = IdentifiedModel::load(model).map_err(|e| Failure::input(e.to_string()))?;
+    let mapping = load_mapping(mapping)?;
+    let reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
+        .map_err(|e| Failure::input(e.to_string()))?;
+    let mut text = String::from("t,fx,fy,fz,mx,my,mz\n");
+    let mut ws = Workspace::default();
+    for chunk in reader {
+        let chunk = chunk.map_err(|e| Failure::input(e.to_string()))?;
+        let y = m
+            .predict_chunk(&chunk, &mut ws)
+            .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
+        for k in 0..chunk.len() {
+            text.push_str(&format!("{}", chunk.t[k]));
+            for col in &y {
+                text.push_str(&format!(",{}", col[k]));
+            }
+            text.push('\n');
+        }
+    }
+    write_atomically(out, text.as_bytes())
+        .map_err(|e| Failure::input(format!("{}: cannot write: {e}", out.display())))
+}
+
+/// `mrsysid validate`: fit metrics of a saved model on other logs.
+pub fn validate(
+    model: &Path,
+    logs: &[PathBuf],
+    mapping: Option<&Path>,
+    json: Option<&Path>,
+) -> Result<(), Failure> {
+    let m = IdentifiedModel::load(model).map_err(|e| Failure::input(e.to_string()))?;
+    let mapping = load_mapping(mapping)?;
+    let mut acc = Accumulator::new(&m.structure);
+    let mut ws = Workspace::default();
+    for log in logs {
+        let reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
+            .map_err(|e| Failure::input(e.to_string()))?;
+        for chunk in reader {
+            let chunk = chunk.map_err(|e| Failure::input(e.to_string()))?;
+            acc.push(&m.structure, &chunk, &mut ws)
+                .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
+        }
+    }
+    if acc.count() == 0 {
+        return Err(Failure::fit("no samples in the validation logs".into()));
+    }
+    let metrics = estimate::evaluate(&m.structure, &m.theta(), &acc)
+        .map_err(|e| Failure::fit(e.to_string()))?;
+    let rows: Vec<AxisRow> = metrics.iter().map(AxisRow::from).collect();
+    println!("{} samples; model {}", acc.count(), model.display());
+    println!(
+        "  {:<4} {:>10} {:>8} {:>8} {:>12}",
+        "axis", "NRMSE [%]", "TIC", "R2 [%]", "RMSE"
+    );
+    for r in &rows {
+        println!(
+            "  {:<4} {:>10.2} {:>8.3} {:>8.1} {:>12.4e}",
+            r.axis.name(),
+            100.0 * r.nrmse,
+            r.tic,
+            100.0 * r.r2,
+            r.rmse
+        );
+    }
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(
+            &serde_json::json!({ "samples": acc.count(), "axes": rows }),
+        )
+        .map_err(|e| Failure::fit(e.to_string()))?;
+        write_atomically(path, text.as_bytes())
+            .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,475 @@
+//! The `mrsysid fit` pipeline, as a library call: read logs in parallel into mergeable
+//! statistics (fit data and hold-out validation data), estimate (seed §5), then a
+//! streaming second pass for residual diagnostics and plot series.
+//!
+//! Hold-out: without explicit validation logs, each log's time axis is cut into
+//! contiguous segments of [`Holdout::segment_seconds`] from its first sample, and every
+//! [`Holdout::every`]-th segment (the last of each group) is held out for validation —
+//! 20 % of the data in 2 s segments by default. Rows of a time series are never
+//! sampled at random.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use crate::diagnose::{
+    Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis, diagnose, library,
+};
+use crate::estimate::{
+    self, AxisMetrics, DiagnosticOptions, Fit, FitOptions, ResidualDiagnostics, ResidualPass,
+};
+use crate::io::{self, LogReader, Mapping, ReadOptions, Summary};
+use crate::model::{ModelStructure, Workspace};
+use crate::sample::{Axis, SampleChunk};
+use crate::stats::Accumulator;
+use crate::vehicle::Vehicle;
+
+/// Time-segment hold-out of the fit logs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Holdout {
+    /// Segment length, s.
+    pub segment_seconds: f64,
+    /// Every `every`-th segment is held out (fraction 1/every).
+    pub every: usize,
+}
+
+impl Default for Holdout {
+    fn default() -> Self {
+        Self {
+            segment_seconds: 2.0,
+            every: 5,
+        }
+    }
+}
+
+impl Holdout {
+    /// True when the sample at `t` (s), in a log starting at `t0` (s), is held out.
+    pub fn holds_out(&self, t: f64, t0: f64) -> bool {
+        let segment = ((t - t0) / self.segment_seconds).floor() as usize;
+        self.every > 0 && segment % self.every == self.every - 1
+    }
+}
+
+/// Where validation figures come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Validation {
+    /// Hold out time segments of the fit logs.
+    Holdout(Holdout),
+    /// Separate logs (the fit logs are used whole).
+    Logs(Vec<PathBuf>),
+}
+
+/// Everything `fit` needs.
+#[derive(Debug, Clone)]
+pub struct FitRequest {
+    /// Logs to fit.
+    pub logs: Vec<PathBuf>,
+    /// The vehicle.
+    pub vehicle: Vehicle,
+    /// Mapping for logs that do not follow the contract.
+    pub mapping: Option<Mapping>,
+    /// Reader options.
+    pub read: ReadOptions,
+    /// Eq. 22 structure.
+    pub structure: ModelStructure,
+    /// Estimation options.
+    pub fit: FitOptions,
+    /// Validation data.
+    pub validation: Validation,
+    /// Reader threads (≥ 1).
+    pub threads: usize,
+    /// Run the second pass (residual diagnostics, plot series).
+    pub second_pass: bool,
+    /// Run the closing-the-loop diagnosis (in the second pass).
+    pub diagnose: Option<DiagnoseOptions>,
+}
+
+/// A failure of the pipeline, with the exit code it maps to.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// Bad input file (exit code 2).
+    #[error("{0}")]
+    Input(String),
+    /// The data cannot support the fit (exit code 1).
+    #[error("{0}")]
+    Fit(String),
+}
+
+impl PipelineError {
+    /// Process exit code: 2 for bad input, 1 for a failed fit.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Self::Input(_) => 2,
+            Self::Fit(_) => 1,
+        }
+    }
+}
+
+/// Decimated measured/predicted series for plots, per axis.
+#[derive(Debug, Clone, Default)]
+pub struct PlotSeries {
+    /// Time, s (logs are laid end to end).
+    pub t: Vec<f64>,
+    /// Measured output per axis.
+    pub measured: [Vec<f64>; 6],
+    /// Model output per axis.
+    pub predicted: [Vec<f64>; 6],
+}
+
+/// What the pipeline produced.
+#[derive(Debug, Clone)]
+pub struct FitOutcome {
+    /// The estimates.
+    pub fit: Fit,
+    /// Fit statistics (for refits with candidate effects).
+    pub fit_stats: Accumulator,
+    /// Validation statistics.
+    pub validation_stats: Accumulator,
+    /// Goodness of fit on the validation data.
+    pub validation: [AxisMetrics; 6],
+    /// Residual diagnostics of the fit data (second pass).
+    pub diagnostics: Option<ResidualDiagnostics>,
+    /// Fit-data series for plots (second pass).
+    pub fit_series: PlotSeries,
+    /// Validation-data series for plots (second pass).
+    pub validation_series: PlotSeries,
+    /// One reader summary per log, fit logs first.
+    pub summaries: Vec<Summary>,
+    /// Description of the validation data.
+    pub validation_source: String,
+    /// Closing-the-loop result.
+    pub diagnosis: Option<Diagnosis>,
+}
+
+/// Fit and validation statistics of one log.
+struct LogStats {
+    fit: Accumulator,
+    validation: Accumulator,
+    summary: Summary,
+}
+
+fn input_error(e: impl std::fmt::Display) -> PipelineError {
+    PipelineError::Input(e.to_string())
+}
+
+fn open(path: &Path, req: &FitRequest) -> Result<LogReader, PipelineError> {
+    io::open_log(path, &req.vehicle, req.mapping.as_ref(), &req.read).map_err(input_error)
+}
+
+/// Reads one log, routing each sample to the fit or validation statistics.
+fn read_log(path: &Path, role: Role, req: &FitRequest) -> Result<LogStats, PipelineError> {
+    let mut reader = open(path, req)?;
+    let mut stats = LogStats {
+        fit: Accumulator::new(&req.structure),
+        validation: Accumulator::new(&req.structure),
+        summary: Summary::default(),
+    };
+    let mut ws = Workspace::default();
+    let mut split = Splitter::new(role);
+    for chunk in reader.by_ref() {
+        let chunk = chunk.map_err(input_error)?;
+        split.route(&chunk, |part, to_validation| {
+            let acc = if to_validation {
+                &mut stats.validation
+            } else {
+                &mut stats.fit
+            };
+            acc.push(&req.structure, part, &mut ws).map_err(input_error)
+        })?;
+    }
+    stats.summary = reader.summary().clone();
+    Ok(stats)
+}
+
+/// How a log's samples are used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Role {
+    /// All samples fit.
+    Fit,
+    /// All samples validate.
+    Validation,
+    /// Time segments split between the two.
+    Split(Holdout),
+}
+
+/// Cuts chunks into runs of fit and validation samples.
+struct Splitter {
+    role: Role,
+    t0: Option<f64>,
+    part: SampleChunk,
+}
+
+impl Splitter {
+    fn new(role: Role) -> Self {
+        Self {
+            role,
+            t0: None,
+            part: SampleChunk::default(),
+        }
+    }
+
+    /// Calls `sink(run, to_validation)` for each maximal run of samples of one kind.
+    fn route(
+        &mut self,
+        chunk: &SampleChunk,
+        mut sink: impl FnMut(&SampleChunk, bool) -> Result<(), PipelineError>,
+    ) -> Result<(), PipelineError> {
+        let holdout = match self.role {
+            Role::Fit => return sink(chunk, false),
+            Role::Validation => return sink(chunk, true),
+            Role::Split(h) => h,
+        };
+        if chunk.is_empty() {
+            return Ok(());
+        }
+        let t0 = *self.t0.get_or_insert(chunk.t[0]);
+        let mut start = 0;
+        while start < chunk.len() {
+            let kind = holdout.holds_out(chunk.t[start], t0);
+            let mut end = start + 1;
+            while end < chunk.len() && holdout.holds_out(chunk.t[end], t0) == kind {
+                end += 1;
+            }
+            if start == 0 && end == chunk.len() {
+                return sink(chunk, kind);
+            }
+            self.part.clear();
+            self.part.extend_from(chunk, start..end);
+            sink(&self.part, kind)?;
+            start = end;
+        }
+        Ok(())
+    }
+}
+
+/// Reads `jobs` on up to `threads` threads; results come back in job order, so merged
+/// statistics do not depend on scheduling.
+fn read_all(jobs: &[(PathBuf, Role)], req: &FitRequest) -> Result<Vec<LogStats>, PipelineError> {
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<Result<LogStats, PipelineError>>>> =
+        Mutex::new((0..jobs.len()).map(|_| None).collect());
+    let workers = req.threads.clamp(1, jobs.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some((path, role)) = jobs.get(i) else {
+                        break;
+                    };
+                    let r = read_log(path, *role, req);
+                    results.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(r);
+                }
+            });
+        }
+    });
+    results
+        .into_inner()
+        .unwrap_or_else(|e| e.into_inner())
+        .into_iter()
+        .map(|r| r.unwrap_or_else(|| Err(PipelineError::Fit("a reader thread stopped".into()))))
+        .collect()
+}
+
+fn jobs(req: &FitRequest) -> Vec<(PathBuf, Role)> {
+    match &req.validation {
+        Validation::Holdout(h) => req
+            .logs
+            .iter()
+            .map(|p| (p.clone(), Role::Split(*h)))
+            .collect(),
+        Validation::Logs(v) => req
+            .logs
+            .iter()
+            .map(|p| (p.clone(), Role::Fit))
+            .chain(v.iter().map(|p| (p.clone(), Role::Validation)))
+            .collect(),
+    }
+}
+
+/// Runs the pipeline.
+pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
+    let jobs = jobs(req);
+    let per_log = read_all(&jobs, req)?;
+    let mut fit_stats = Accumulator::new(&req.structure);
+    let mut validation_stats = Accumulator::new(&req.structure);
+    let mut summaries = Vec::new();
+    for s in per_log {
+        fit_stats.merge(&s.fit).map_err(input_error)?;
+        validation_stats.merge(&s.validation).map_err(input_error)?;
+        summaries.push(s.summary);
+    }
+    if fit_stats.count() == 0 {
+        return Err(PipelineError::Fit("no samples to fit".into()));
+    }
+    let fit = estimate::fit(&req.structure, &fit_stats, &req.fit)
+        .map_err(|e| PipelineError::Fit(e.to_string()))?;
+    let validation = if validation_stats.count() > 0 {
+        estimate::evaluate(&req.structure, &fit.mmr.theta, &validation_stats)
+            .map_err(|e| PipelineError::Fit(e.to_string()))?
+    } else {
+        return Err(PipelineError::Fit(
+            "no validation samples: the logs are shorter than one hold-out cycle; give --validate logs or a shorter --holdout-segment".into(),
+        ));
+    };
+    let validation_source = match &req.validation {
+        Validation::Holdout(h) => format!(
+            "hold-out: every {}th {:.1} s segment of the fit logs",
+            h.every, h.segment_seconds
+        ),
+        Validation::Logs(v) => format!("{} validation log(s)", v.len()),
+    };
+    let mut outcome = FitOutcome {
+        fit,
+        fit_stats,
+        validation_stats,
+        validation,
+        diagnostics: None,
+        fit_series: PlotSeries::default(),
+        validation_series: PlotSeries::default(),
+        summaries,
+        validation_source,
+        diagnosis: None,
+    };
+    if req.second_pass || req.diagnose.is_some() {
+        second_pass(req, &jobs, &mut outcome)?;
+    }
+    Ok(outcome)
+}
+
+/// Points kept per plotted series: buckets of the whole run keep their first sample.
+const PLOT_POINTS: u64 = 4000;
+
+/// Candidate effects added to the base structure, with their parameter indices.
+struct Extended {
+    structure: ModelStructure,
+    candidates: Vec<Candidate>,
+    params: Vec<Vec<usize>>,
+    fit: Accumulator,
+    validation: Accumulator,
+}
+
+impl Extended {
+    fn new(req: &FitRequest, fit: &Fit, has_height: bool, has_omega_dot: bool) -> Self {
+        let ctx = CandidateContext {
+            vehicle: &req.vehicle,
+            structure: &req.structure,
+            theta: &fit.mmr.theta,
+            has_height,
+            has_omega_dot,
+        };
+        let candidates = library(&ctx);
+        let mut structure = req.structure.clone();
+        let params = candidates
+            .iter()
+            .map(|c| c.add_to(&mut structure))
+            .collect();
+        let fit = Accumulator::new(&structure);
+        let validation = Accumulator::new(&structure);
+        Self {
+            structure,
+            candidates,
+            params,
+            fit,
+            validation,
+        }
+    }
+}
+
+/// Streams the data again: residual diagnostics of the fit samples, decimated series of
+/// both parts for plots, and the statistics of every candidate effect.
+fn second_pass(
+    req: &FitRequest,
+    jobs: &[(PathBuf, Role)],
+    out: &mut FitOutcome,
+) -> Result<(), PipelineError> {
+    let mut pass = ResidualPass::new(&req.structure, &out.fit, DiagnosticOptions::default());
+    let model = crate::identified::IdentifiedModel::new(
+        req.vehicle.clone(),
+        req.structure.clone(),
+        &out.fit.mmr.theta,
+        &vec![0.0; out.fit.mmr.theta.len()],
+    );
+    let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
+    let strides = [
+        stride(out.fit_stats.count()),
+        stride(out.validation_stats.count()),
+    ];
+    let mut seen = [0u64; 2];
+    let mut t_offset = [0.0f64; 2];
+    let mut ws = Workspace::default();
+    let mut extended: Option<Extended> = None;
+    for (path, role) in jobs {
+        let mut reader = open(path, req)?;
+        let mut split = Splitter::new(*role);
+        let mut span = [(f64::NAN, f64::NAN); 2];
+        for chunk in reader.by_ref() {
+            let chunk = chunk.map_err(input_error)?;
+            if req.diagnose.is_some() && extended.is_none() {
+                extended = Some(Extended::new(
+                    req,
+                    &out.fit,
+                    chunk.height.len() == chunk.len(),
+                    chunk.has_omega_dot(),
+                ));
+            }
+            split.route(&chunk, |part, to_validation| {
+                let k = usize::from(to_validation);
+                if let Some(ext) = extended.as_mut() {
+                    let acc = if to_validation {
+                        &mut ext.validation
+                    } else {
+                        &mut ext.fit
+                    };
+                    acc.push(&ext.structure, part, &mut ws)
+                        .map_err(input_error)?;
+                }
+                if !to_validation {
+                    pass.push(part, &mut ws).map_err(input_error)?;
+                }
+                let y = model.predict_chunk(part, &mut ws).map_err(input_error)?;
+                let series = if to_validation {
+                    &mut out.validation_series
+                } else {
+                    &mut out.fit_series
+                };
+                if span[k].0.is_nan() {
+                    span[k].0 = part.t[0];
+                }
+                for (i, &t) in part.t.iter().enumerate() {
+                    if seen[k] % strides[k] == 0 {
+                        series.t.push(t - span[k].0 + t_offset[k]);
+                        for a in Axis::ALL {
+                            series.measured[a as usize].push(part.wrench[a as usize][i]);
+                            series.predicted[a as usize].push(y[a as usize][i]);
+                        }
+                    }
+                    seen[k] += 1;
+                }
+                span[k].1 = part.t[part.len() - 1];
+                Ok(())
+            })?;
+        }
+        // Lay logs end to end on the plots' time axis.
+        for k in 0..2 {
+            if span[k].0.is_finite() {
+                t_offset[k] += span[k].1 - span[k].0;
+            }
+        }
+    }
+    out.diagnostics = Some(pass.finish());
+    if let (Some(options), Some(ext)) = (req.diagnose, extended) {
+        let stats = CandidateStatistics {
+            extended: &ext.structure,
+            candidates: &ext.candidates,
+            candidate_params: &ext.params,
+            base_params: req.structure.params.len(),
+            fit: &ext.fit,
+            validation: &ext.validation,
+        };
+        out.diagnosis = Some(
+            diagnose(&stats, &req.fit, &options).map_err(|e| PipelineError::Fit(e.to_string()))?,
+        );
+    }
+    Ok(())
+}
