@@ -58,3 +58,17 @@ fn a_gap_splits_the_log_into_segments_never_bridged() {
     assert_eq!(s.gaps.len(), 1);
     assert_eq!(s.gaps[0].from, src.t[119]);
 }
+
+#[test]
+fn a_byte_order_mark_before_the_header_is_ignored() {
+    let path = tmp("bom.csv");
+    let text = "\u{feff}t,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz\n\
+                0,1,0,0,0,0,0,900,900,900,900,0,0,-11.8,0,0,0\n\
+                0.01,1,0,0,0,0,0,900,900,900,900,0,0,-11.8,0,0,0\n";
+    std::fs::write(&path, text).unwrap();
+    let n: usize = open_log(&path, &quad(0.0), None, &ReadOptions::default())
+        .unwrap()
+        .map(|c| c.unwrap().len())
+        .sum();
+    assert_eq!(n, 2);
+}

@@ -59,7 +59,8 @@ impl CsvSource {
                     ErrorKind::Format(format!("header field {} is not valid UTF-8", i + 1)),
                 )
             })?;
-            header.push(name.trim().to_string());
+            // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first name.
+            header.push(name.trim_start_matches('\u{feff}').trim().to_string());
         }
         let names: Vec<&str> = header.iter().map(String::as_str).collect();
         let mapping = match mapping {
