@@ -58,3 +58,44 @@ fn a_gap_splits_the_log_into_segments_never_bridged() {
     assert_eq!(s.gaps.len(), 1);
     assert_eq!(s.gaps[0].from, src.t[119]);
 }
+
+#[test]
+fn a_byte_order_mark_before_the_header_is_ignored() {
+    let path = tmp("bom.csv");
+    let text = "\u{feff}t,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz\n\
+                0,1,0,0,0,0,0,900,900,900,900,0,0,-11.8,0,0,0\n\
+                0.01,1,0,0,0,0,0,900,900,900,900,0,0,-11.8,0,0,0\n";
+    std::fs::write(&path, text).unwrap();
+    let n: usize = open_log(&path, &quad(0.0), None, &ReadOptions::default())
+        .unwrap()
+        .map(|c| c.unwrap().len())
+        .sum();
+    assert_eq!(n, 2);
+}
+
+#[test]
+fn implausible_units_and_spikes_are_reported() {
+    // Accelerometer logged in g but mapped as m/s² (|a| ≈ 1), rates in deg/s mapped as
+    // rad/s (up to 60), and one 400 rad/s rotor-speed spike at row 50.
+    let path = tmp("units.csv");
+    let mut text = String::from("t,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,ax,ay,az\n");
+    for k in 0..100 {
+        let t = k as f64 * 0.01;
+        let w1 = if k == 50 { 1300.0 } else { 900.0 + 10.0 * t };
+        text += &format!(
+            "{t},1,0,0,{},0,0,{w1},900,900,900,0,0,-1.0\n",
+            60.0 * (3.0 * t).sin()
+        );
+    }
+    std::fs::write(&path, text).unwrap();
+    let mut reader = open_log(&path, &quad(0.0), None, &ReadOptions::default()).unwrap();
+    for c in reader.by_ref() {
+        c.unwrap();
+    }
+    let s = reader.summary();
+    assert_eq!(s.unit_warnings.len(), 2, "{:?}", s.unit_warnings);
+    assert!(s.unit_warnings[0].starts_with("mean |F|/m = 1.000 m/s^2 is far from g"));
+    assert!(s.unit_warnings[1].starts_with("max |body rate| = 60.0 rad/s"));
+    assert_eq!(s.spikes.get("rotor_speeds"), Some(&1));
+    assert_eq!(s.spikes.get("rates"), None, "a smooth sine is no spike");
+}

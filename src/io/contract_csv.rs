@@ -59,7 +59,8 @@ impl CsvSource {
                     ErrorKind::Format(format!("header field {} is not valid UTF-8", i + 1)),
                 )
             })?;
-            header.push(name.trim().to_string());
+            // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first name.
+            header.push(name.trim_start_matches('\u{feff}').trim().to_string());
         }
         let names: Vec<&str> = header.iter().map(String::as_str).collect();
         let mapping = match mapping {
@@ -157,7 +158,10 @@ impl RowSource for CsvSource {
 fn parse_field(bytes: &[u8]) -> Result<f64, String> {
     let text =
         std::str::from_utf8(bytes).map_err(|_| String::from_utf8_lossy(bytes).into_owned())?;
-    text.trim().parse::<f64>().map_err(|_| text.to_string())
+    let padded = bytes.first().is_some_and(u8::is_ascii_whitespace)
+        || bytes.last().is_some_and(u8::is_ascii_whitespace);
+    let number = if padded { text.trim() } else { text };
+    number.parse::<f64>().map_err(|_| text.to_string())
 }
 
 /// Writes samples as a DESIGN.md contract CSV (header `t,u,v,w,p,q,r,omega_1..N,

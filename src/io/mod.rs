@@ -440,12 +440,12 @@ impl LogReader {
             return Ok(None);
         };
         self.summary.rows_read += 1;
-        let file = self.summary.file.clone();
+        let file = self.summary.file.as_str();
         for slot in 0..self.raw.len() {
             let v = self.raw[slot] * self.layout.factor(slot);
             if !v.is_finite() {
                 return Err(IoError::new(
-                    &file,
+                    file,
                     loc,
                     self.label(slot),
                     ErrorKind::NotFinite(self.raw[slot]),
@@ -456,7 +456,7 @@ impl LogReader {
                 && !(*lo..=*hi).contains(&v)
             {
                 return Err(IoError::new(
-                    &file,
+                    file,
                     loc,
                     self.label(slot),
                     ErrorKind::OutOfRange {
@@ -472,7 +472,7 @@ impl LogReader {
             ..Row::default()
         };
         self.convert(&mut row)
-            .map_err(|(slot, kind)| IoError::new(&file, loc, self.label(slot), kind))?;
+            .map_err(|(slot, kind)| IoError::new(file, loc, self.label(slot), kind))?;
         Ok(Some(row))
     }
 
@@ -748,17 +748,29 @@ impl LogReader {
         ];
         for (signal, count) in groups {
             let mut spiked = false;
+            let floor = spike_floor(signal);
+            let value = |r: &Row, comp: usize| match signal {
+                Signal::Rates => r.rates[comp],
+                Signal::RotorSpeeds => r.omega[comp],
+                Signal::Force => r.force[comp],
+                _ => r.specific_force[comp],
+            };
+            let centre = &self.window[k];
+            let neighbours = self.window.range(lo..lo + 2 * SPIKE_HALF_WINDOW + 1);
             for comp in 0..count {
-                self.scratch.clear();
-                for r in self.window.range(lo..lo + 2 * SPIKE_HALF_WINDOW + 1) {
-                    self.scratch.push(match signal {
-                        Signal::Rates => r.rates[comp],
-                        Signal::RotorSpeeds => r.omega[comp],
-                        Signal::Force => r.force[comp],
-                        _ => r.specific_force[comp],
-                    });
+                // Exact pre-test: the median is a window value, so a centre within
+                // `floor` of every neighbour cannot depart from it by more than `floor`.
+                let x = value(centre, comp);
+                if neighbours
+                    .clone()
+                    .all(|r| (value(r, comp) - x).abs() <= floor)
+                {
+                    continue;
                 }
-                spiked |= is_spike(&mut self.scratch, spike_floor(signal));
+                self.scratch.clear();
+                self.scratch
+                    .extend(neighbours.clone().map(|r| value(r, comp)));
+                spiked |= is_spike(&mut self.scratch, floor);
             }
             if spiked {
                 *self

@@ -91,7 +91,8 @@ impl UnitStats {
     /// Adds one sample: force (N), mass (kg), rates (rad/s), rotor speeds (rad/s).
     pub fn push(&mut self, force: [f64; 3], mass: f64, rates: [f64; 3], omega: &[f64]) {
         self.samples += 1;
-        self.sum_specific_force += (force[0].hypot(force[1]).hypot(force[2])) / mass;
+        let norm = (force[0] * force[0] + force[1] * force[1] + force[2] * force[2]).sqrt();
+        self.sum_specific_force += norm / mass;
         for r in rates {
             self.max_rate = self.max_rate.max(r.abs());
         }

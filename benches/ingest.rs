@@ -1,0 +1,138 @@
+//! Ingest throughput: a 1 M-row contract CSV through `io::open_log` against a bare
+//! `csv::ByteRecord` pass over the same file, and a 100 k-sample MCAP (JSON and CDR,
+//! three topics) through `open_log` against bare message iteration with the `mcap`
+//! crate's linear reader. Both baselines read the same bytes without parsing numbers.
+//!
+//! `cargo bench --bench ingest -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
+use mrsysid::io::contract_csv::write_contract_csv;
+use mrsysid::io::mcap_write::{Encoding, write_samples, written_mapping};
+use mrsysid::io::{ReadOptions, open_log};
+use mrsysid::sample::SampleChunk;
+use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+
+const CSV_ROWS: usize = 1_000_000;
+const MCAP_SAMPLES: usize = 100_000;
+
+fn vehicle() -> Vehicle {
+    let props = MassAndRotorProperties {
+        mass: 1.2,
+        inertia: [[0.011, 0.0, 0.0], [0.0, 0.012, 0.0], [0.0, 0.0, 0.021]],
+        air_density: 1.225,
+        rotor_radius: 0.0635,
+        hub_height: 0.02,
+        rotor_inertia: 0.0,
+    };
+    Vehicle::preset("bench-quad", Preset::QuadX, 0.16, 1.0, props).expect("valid vehicle")
+}
+
+/// Smooth flight-like signals, chunk by chunk, 400 Hz.
+fn chunks(n: usize) -> impl Iterator<Item = SampleChunk> {
+    (0..n.div_ceil(4096)).map(move |c| {
+        let len = 4096.min(n - c * 4096);
+        let mut ch = SampleChunk::with_capacity(4, len, false);
+        for j in 0..len {
+            let t = (c * 4096 + j) as f64 / 400.0;
+            ch.t.push(t);
+            for a in 0..3 {
+                ch.velocity[a].push(3.0 * (0.3 * t + a as f64).sin());
+                ch.rates[a].push(0.5 * (1.7 * t + a as f64).cos());
+            }
+            for (i, w) in ch.omega.iter_mut().enumerate() {
+                w.push(900.0 + 80.0 * (2.1 * t + i as f64).sin());
+            }
+            for (a, f) in ch.wrench.iter_mut().enumerate() {
+                f.push(if a == 2 { -11.8 } else { 0.0 } + 0.2 * (0.9 * t + a as f64).sin());
+            }
+        }
+        ch
+    })
+}
+
+fn file(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("mrsysid-bench-{name}"))
+}
+
+fn ingest(path: &Path, v: &Vehicle, mapping: Option<&mrsysid::io::Mapping>) -> usize {
+    open_log(path, v, mapping, &ReadOptions::default())
+        .expect("opens")
+        .map(|c| c.expect("valid").len())
+        .sum()
+}
+
+fn bare_csv(path: &Path) -> usize {
+    let mut r = csv::Reader::from_path(path).expect("opens");
+    let mut rec = csv::ByteRecord::new();
+    let mut n = 0;
+    while r.read_byte_record(&mut rec).expect("valid") {
+        n += rec.len();
+    }
+    n
+}
+
+fn bare_mcap(path: &Path) -> usize {
+    let mut f = std::fs::File::open(path).expect("opens");
+    let mut reader = LinearReader::new();
+    let mut bytes = 0;
+    while let Some(ev) = reader.next_event() {
+        match ev.expect("valid") {
+            LinearReadEvent::ReadRequest(need) => {
+                let n = f.read(reader.insert(need)).expect("reads");
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { opcode, data } => {
+                if let mcap::records::Record::Message { data, .. } =
+                    mcap::parse_record(opcode, data).expect("valid")
+                {
+                    bytes += data.len();
+                }
+            }
+        }
+    }
+    bytes
+}
+
+fn bench(c: &mut Criterion) {
+    let v = vehicle();
+    let csv_path = file("1m.csv");
+    if !csv_path.exists() {
+        let all: Vec<SampleChunk> = chunks(CSV_ROWS).collect();
+        write_contract_csv(&csv_path, &all).expect("writes");
+    }
+    let mut g = c.benchmark_group("csv_1m_rows");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(CSV_ROWS as u64));
+    g.bench_function("bare_byte_record", |b| {
+        b.iter(|| black_box(bare_csv(&csv_path)))
+    });
+    g.bench_function("open_log", |b| {
+        b.iter(|| black_box(ingest(&csv_path, &v, None)))
+    });
+    g.finish();
+
+    let mapping = written_mapping(4, false, false, false);
+    for encoding in [Encoding::Json, Encoding::Cdr] {
+        let path = file(&format!("100k-{encoding:?}.mcap"));
+        if !path.exists() {
+            let all: Vec<SampleChunk> = chunks(MCAP_SAMPLES).collect();
+            write_samples(&path, &v, &all, encoding).expect("writes");
+        }
+        let mut g = c.benchmark_group(format!("mcap_100k_{encoding:?}"));
+        g.sample_size(10);
+        g.throughput(Throughput::Elements(MCAP_SAMPLES as u64));
+        g.bench_function("bare_messages", |b| b.iter(|| black_box(bare_mcap(&path))));
+        g.bench_function("open_log", |b| {
+            b.iter(|| black_box(ingest(&path, &v, Some(&mapping))))
+        });
+        g.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
