@@ -49,12 +49,35 @@ fn fit_on_shipped_sweeps_meets_fit_quality_bounds() {
         ("data/hexa_x_sweep.csv", "data/vehicles/hexa_x.toml"),
     ] {
         let report = tmp(&format!("{}.json", vehicle.replace('/', "_")));
-        let out = mrsysid(&["fit", data, "--vehicle", vehicle, "--json", report.to_str().unwrap(), "--no-diagnose", "--quiet"]);
-        assert!(out.status.success(), "{data}: {}", String::from_utf8_lossy(&out.stderr));
+        let out = mrsysid(&[
+            "fit",
+            data,
+            "--vehicle",
+            vehicle,
+            "--json",
+            report.to_str().unwrap(),
+            "--no-diagnose",
+            "--quiet",
+        ]);
+        assert!(
+            out.status.success(),
+            "{data}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let v = json(&report);
         assert_eq!(v["schema_version"], 1);
-        assert_eq!(v["samples"].as_u64().unwrap() + v["validation_samples"].as_u64().unwrap(), 2000);
-        for (axis, bound) in [("Fx", 0.01), ("Fy", 0.01), ("Fz", 0.05), ("Mx", 0.04), ("My", 0.04), ("Mz", 0.12)] {
+        assert_eq!(
+            v["samples"].as_u64().unwrap() + v["validation_samples"].as_u64().unwrap(),
+            2000
+        );
+        for (axis, bound) in [
+            ("Fx", 0.01),
+            ("Fy", 0.01),
+            ("Fz", 0.05),
+            ("Mx", 0.04),
+            ("My", 0.04),
+            ("Mz", 0.12),
+        ] {
             let nrmse = axis_metric(&v, "validation", axis, "nrmse");
             assert!(nrmse < bound, "{data} {axis}: validation NRMSE {nrmse}");
         }
@@ -64,17 +87,39 @@ fn fit_on_shipped_sweeps_meets_fit_quality_bounds() {
 #[test]
 fn printed_tables_match_the_json() {
     let report = tmp("quadx.json");
-    let out = mrsysid(&["fit", "data/quad_x_sweep.csv", "--vehicle", "data/vehicles/quad_x.toml", "--json", report.to_str().unwrap(), "--no-diagnose"]);
+    let out = mrsysid(&[
+        "fit",
+        "data/quad_x_sweep.csv",
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--json",
+        report.to_str().unwrap(),
+        "--no-diagnose",
+    ]);
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
-    for section in ["FSOA Fx", "FSOA Mz", "MMR fit per axis (Table 4)", "MMR parameter estimates (Table 5)", "Residual covariance", "Residual normality", "Identifiability"] {
+    for section in [
+        "FSOA Fx",
+        "FSOA Mz",
+        "MMR fit per axis (Table 4)",
+        "MMR parameter estimates (Table 5)",
+        "Residual covariance",
+        "Residual normality",
+        "Identifiability",
+    ] {
         assert!(text.contains(section), "missing {section}");
     }
     let v = json(&report);
     // The Fz NRMSE line shows the JSON value to two decimals in percent.
     let nrmse = 100.0 * axis_metric(&v, "axes", "Fz", "nrmse");
-    let line = text.lines().find(|l| l.trim_start().starts_with("Fz ") && l.contains('|')).unwrap();
-    assert!(line.contains(&format!("{nrmse:.2}")), "{line} vs {nrmse:.2}");
+    let line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("Fz ") && l.contains('|'))
+        .unwrap();
+    assert!(
+        line.contains(&format!("{nrmse:.2}")),
+        "{line} vs {nrmse:.2}"
+    );
 }
 
 #[test]
@@ -93,7 +138,11 @@ fn diagnosis_finds_the_undeclared_drag_in_the_shipped_flight() {
         model.to_str().unwrap(),
         "--quiet",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&report);
     let d = &v["diagnosis"];
     let first = &d["effects_added"][0];
@@ -103,7 +152,10 @@ fn diagnosis_finds_the_undeclared_drag_in_the_shipped_flight() {
     assert!((area_x - 0.012).abs() < 0.0012, "{area_x}");
     let before = axis_metric(d, "before", "Fx", "nrmse");
     let after = axis_metric(d, "after", "Fx", "nrmse");
-    assert!(after < 0.7 * before, "Fx validation NRMSE {before} -> {after}");
+    assert!(
+        after < 0.7 * before,
+        "Fx validation NRMSE {before} -> {after}"
+    );
     // The saved model is the augmented one.
     let text = std::fs::read_to_string(&model).unwrap();
     assert!(text.contains("drag_area_x"));
@@ -112,11 +164,31 @@ fn diagnosis_finds_the_undeclared_drag_in_the_shipped_flight() {
 #[test]
 fn predict_and_validate_agree_with_fit() {
     let model = tmp("sweep_model.toml");
-    let out = mrsysid(&["fit", "data/quad_plus_sweep.csv", "--vehicle", "data/vehicles/quad_plus.toml", "--model-out", model.to_str().unwrap(), "--no-diagnose", "--quiet"]);
+    let out = mrsysid(&[
+        "fit",
+        "data/quad_plus_sweep.csv",
+        "--vehicle",
+        "data/vehicles/quad_plus.toml",
+        "--model-out",
+        model.to_str().unwrap(),
+        "--no-diagnose",
+        "--quiet",
+    ]);
     assert!(out.status.success());
     let pred = tmp("pred.csv");
-    let out = mrsysid(&["predict", "--model", model.to_str().unwrap(), "data/quad_plus_sweep.csv", "--out", pred.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = mrsysid(&[
+        "predict",
+        "--model",
+        model.to_str().unwrap(),
+        "data/quad_plus_sweep.csv",
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(&pred).unwrap();
     assert_eq!(text.lines().count(), 2001);
     assert_eq!(text.lines().next().unwrap(), "t,fx,fy,fz,mx,my,mz");
@@ -133,8 +205,19 @@ fn predict_and_validate_agree_with_fit() {
     }
     assert!((se / ss).sqrt() < 0.05, "{}", (se / ss).sqrt());
     let vjson = tmp("validate.json");
-    let out = mrsysid(&["validate", "--model", model.to_str().unwrap(), "data/quad_plus_sweep.csv", "--json", vjson.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = mrsysid(&[
+        "validate",
+        "--model",
+        model.to_str().unwrap(),
+        "data/quad_plus_sweep.csv",
+        "--json",
+        vjson.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v = json(&vjson);
     assert_eq!(v["samples"], 2000);
     let r2 = axis_metric(&v, "axes", "Fz", "r2");
@@ -147,11 +230,55 @@ fn bad_input_exits_2_with_a_message_naming_the_file_and_no_output() {
     std::fs::write(&bad_csv, "t,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz\n0,1,0,0,0,0,0,500,500,500,500,0,0,-10,0,0,0\n0.01,nan,0,0,0,0,0,500,500,500,500,0,0,-10,0,0,0\n").unwrap();
     let report = tmp("never.json");
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["fit", bad_csv.to_str().unwrap(), "--vehicle", "data/vehicles/quad_x.toml", "--json", report.to_str().unwrap()], "bad.csv"),
-        (vec!["fit", "data/quad_x_sweep.csv", "--vehicle", "/nonexistent/v.toml"], "/nonexistent/v.toml"),
-        (vec!["fit", "/nonexistent/log.csv", "--vehicle", "data/vehicles/quad_x.toml"], "log.csv"),
-        (vec!["fit", "data/hexa_x_sweep.csv", "--vehicle", "data/vehicles/quad_x.toml"], "rotor"),
-        (vec!["predict", "--model", "/nonexistent/m.toml", "data/quad_x_sweep.csv", "--out", "/tmp/x.csv"], "/nonexistent/m.toml"),
+        (
+            vec![
+                "fit",
+                bad_csv.to_str().unwrap(),
+                "--vehicle",
+                "data/vehicles/quad_x.toml",
+                "--json",
+                report.to_str().unwrap(),
+            ],
+            "bad.csv",
+        ),
+        (
+            vec![
+                "fit",
+                "data/quad_x_sweep.csv",
+                "--vehicle",
+                "/nonexistent/v.toml",
+            ],
+            "/nonexistent/v.toml",
+        ),
+        (
+            vec![
+                "fit",
+                "/nonexistent/log.csv",
+                "--vehicle",
+                "data/vehicles/quad_x.toml",
+            ],
+            "log.csv",
+        ),
+        (
+            vec![
+                "fit",
+                "data/hexa_x_sweep.csv",
+                "--vehicle",
+                "data/vehicles/quad_x.toml",
+            ],
+            "rotor",
+        ),
+        (
+            vec![
+                "predict",
+                "--model",
+                "/nonexistent/m.toml",
+                "data/quad_x_sweep.csv",
+                "--out",
+                "/tmp/x.csv",
+            ],
+            "/nonexistent/m.toml",
+        ),
     ];
     for (args, needle) in cases {
         let out = mrsysid(&args);
