@@ -36,6 +36,15 @@ pub enum EffectKind {
     YawRateDrag,
 }
 
+impl EffectKind {
+    /// True for completions of the Eq. 22 structure itself (terms its assumptions drop),
+    /// as opposed to effects the vehicle or the log adds: these are tried first, so an
+    /// undeclared effect is ranked against a model that already has them.
+    pub fn is_model_completion(self) -> bool {
+        matches!(self, Self::YawRateDrag | Self::LinearVh | Self::CgHeight)
+    }
+}
+
 /// One parameter of a candidate with the columns it multiplies.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CandidateParameter {
@@ -354,8 +363,8 @@ fn cg_height(ctx: &CandidateContext) -> Candidate {
     ];
     Candidate {
         kind: EffectKind::CgHeight,
-        name: "CG height offset".into(),
-        physics: "With the CG dz below the assumed point, in-plane forces act on a longer lever arm in roll and pitch.",
+        name: "in-plane force lever arm".into(),
+        physics: "In-plane forces act dz below the height Eq. 22 assumes (the hubs): the CG is not where assumed, or airframe drag, which Assumption 3 lumps into the rotors, acts nearer the CG.",
         parameters: vec![parameter(
             "cg_dz",
             "m",

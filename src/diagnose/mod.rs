@@ -8,7 +8,7 @@ pub mod procedure;
 pub use candidates::{Candidate, CandidateContext, CandidateParameter, EffectKind, library};
 pub use procedure::{
     CandidateScore, CandidateStatistics, DiagnoseError, DiagnoseOptions, Diagnosis, DiagnosisStep,
-    EffectParameter, diagnose,
+    EffectParameter, diagnose, diagnose_chunks,
 };
 
 use crate::model::{ModelStructure, Parameter};

@@ -33,7 +33,7 @@ pub struct DiagnoseOptions {
     pub alpha: f64,
     /// Smallest relative validation-NRMSE reduction on an affected axis that counts.
     pub min_gain: f64,
-    /// Largest relative validation-NRMSE increase tolerated on any axis.
+    /// Largest relative validation-NRMSE increase tolerated on any one axis.
     pub max_loss: f64,
     /// Relative gain difference below which two kinds are look-alikes.
     pub look_alike: f64,
@@ -46,7 +46,7 @@ impl Default for DiagnoseOptions {
         Self {
             alpha: 0.01,
             min_gain: 0.05,
-            max_loss: 0.01,
+            max_loss: 0.25,
             look_alike: 0.1,
             max_effects: 4,
         }
@@ -151,7 +151,10 @@ fn plausible(name: &str, value: f64) -> bool {
         n if n.starts_with("thrust_scale_") || n.starts_with("torque_scale_") => range(-0.6, 0.6),
         "cg_dx" | "cg_dy" | "cg_dz" => range(-0.2, 0.2),
         "ground_effect_scale" => range(0.0, 3.0),
-        "wake_thrust_loss" | "vortex_ring_thrust_loss" => range(0.0, 1.0),
+        "wake_thrust_loss" => range(0.0, 1.0),
+        // Measured vortex-ring thrust losses are tens of percent; a fitted loss beyond
+        // 60 % is a bump shape fitting inflow-model error, not the state itself.
+        "vortex_ring_thrust_loss" => range(0.0, 0.6),
         n if n.starts_with("drag_area_") => range(0.0, 2.0),
         "rotor_speed_delay" => range(-0.05, 0.2),
         _ => value.is_finite(),
@@ -232,10 +235,18 @@ pub fn diagnose(
             .iter()
             .map(|&c| score(stats, &added, c, &current, fit_options, options, level))
             .collect();
+        // Accepted first; among them completions of the Eq. 22 structure before
+        // undeclared effects; then by validation gain.
         scored.sort_by(|a, b| {
-            (a.0.rejected.is_empty(), a.0.total_gain)
-                .partial_cmp(&(b.0.rejected.is_empty(), b.0.total_gain))
-                .unwrap_or(std::cmp::Ordering::Equal)
+            let key = |s: &CandidateScore| {
+                (
+                    s.rejected.is_empty(),
+                    s.rejected.is_empty() && s.kind.is_model_completion(),
+                )
+            };
+            key(&a.0)
+                .cmp(&key(&b.0))
+                .then(a.0.total_gain.total_cmp(&b.0.total_gain))
                 .reverse()
         });
         let best_ok = scored
@@ -250,6 +261,7 @@ pub fn diagnose(
                     .filter(|s| {
                         s.0.rejected.is_empty()
                             && s.0.kind != best.kind
+                            && s.0.kind.is_model_completion() == best.kind.is_model_completion()
                             && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
                     })
                     .map(|s| s.0.name.clone())
@@ -374,10 +386,62 @@ fn score(
             100.0 * best_axis,
             100.0 * options.min_gain
         )
+    } else if s.validation_gain.iter().sum::<f64>() < options.min_gain {
+        format!(
+            "net validation gain over all axes {:.1} % below {:.1} %",
+            100.0 * s.validation_gain.iter().sum::<f64>(),
+            100.0 * options.min_gain
+        )
     } else if worst < -options.max_loss {
         format!("validation worse by {:.1} % on an axis", -100.0 * worst)
     } else {
         String::new()
     };
     (s, c, Some(t))
+}
+
+/// The whole procedure on in-memory data: fits `base` on `fit_data`, builds the
+/// candidates from its estimates, accumulates them over both parts and runs
+/// [`diagnose`]. (The `fit` pipeline does the same while streaming files.)
+pub fn diagnose_chunks(
+    vehicle: &crate::vehicle::Vehicle,
+    base: &ModelStructure,
+    fit_data: &[crate::sample::SampleChunk],
+    validation_data: &[crate::sample::SampleChunk],
+    fit_options: &FitOptions,
+    options: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let err = |e: &dyn std::fmt::Display| DiagnoseError::Fit(e.to_string());
+    let mut ws = crate::model::Workspace::default();
+    let mut acc = Accumulator::new(base);
+    for c in fit_data {
+        acc.push(base, c, &mut ws).map_err(|e| err(&e))?;
+    }
+    let fit = estimate::fit(base, &acc, fit_options).map_err(|e| err(&e))?;
+    let first = fit_data.first();
+    let ctx = super::CandidateContext {
+        vehicle,
+        structure: base,
+        theta: &fit.mmr.theta,
+        has_height: first.is_some_and(|c| c.height.len() == c.len() && !c.is_empty()),
+        has_omega_dot: first.is_some_and(|c| c.has_omega_dot()),
+    };
+    let candidates = super::library(&ctx);
+    let mut extended = base.clone();
+    let params: Vec<Vec<usize>> = candidates.iter().map(|c| c.add_to(&mut extended)).collect();
+    let (mut fa, mut va) = (Accumulator::new(&extended), Accumulator::new(&extended));
+    for (acc, data) in [(&mut fa, fit_data), (&mut va, validation_data)] {
+        for c in data {
+            acc.push(&extended, c, &mut ws).map_err(|e| err(&e))?;
+        }
+    }
+    let stats = CandidateStatistics {
+        extended: &extended,
+        candidates: &candidates,
+        candidate_params: &params,
+        base_params: base.params.len(),
+        fit: &fa,
+        validation: &va,
+    };
+    diagnose(&stats, fit_options, options)
 }

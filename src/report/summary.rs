@@ -73,6 +73,9 @@ pub struct DiagnosisReport {
 pub struct EffectRow {
     /// Effect name, e.g. `weak rotor 3`.
     pub name: String,
+    /// True for a completion of the Eq. 22 structure (a term its assumptions drop), false
+    /// for an undeclared effect of the vehicle or log.
+    pub model_completion: bool,
     /// Axes it acts on.
     pub axes: Vec<Axis>,
     /// Its parameters.
@@ -113,6 +116,7 @@ impl From<&CandidateScore> for EffectRow {
     fn from(c: &CandidateScore) -> Self {
         Self {
             name: c.name.clone(),
+            model_completion: c.kind.is_model_completion(),
             axes: c.axes.clone(),
             parameters: c
                 .parameters

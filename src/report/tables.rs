@@ -78,7 +78,12 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
     }
     for e in &d.effects_added {
         let axes: Vec<&str> = e.axes.iter().map(|a| a.name()).collect();
-        let _ = writeln!(out, "  effect: {} (axes {})", e.name, axes.join(", "));
+        let what = if e.model_completion {
+            "model completion"
+        } else {
+            "effect"
+        };
+        let _ = writeln!(out, "  {what}: {} (axes {})", e.name, axes.join(", "));
         for p in &e.parameters {
             let _ = writeln!(
                 out,
