@@ -457,8 +457,11 @@ fn second_pass(
             }
         }
     }
-    out.diagnostics = Some(pass.finish());
-    if let (Some(options), Some(ext)) = (req.diagnose, extended) {
+    let diagnostics = pass.finish();
+    let inflation = coloured_variance_inflation(&diagnostics);
+    out.diagnostics = Some(diagnostics);
+    if let (Some(mut options), Some(ext)) = (req.diagnose, extended) {
+        options.variance_inflation = options.variance_inflation.max(inflation);
         let stats = CandidateStatistics {
             extended: &ext.structure,
             candidates: &ext.candidates,
@@ -472,4 +475,17 @@ fn second_pass(
         );
     }
     Ok(())
+}
+
+/// (1 + ρ)/(1 − ρ) for the largest lag-1 residual autocorrelation ρ over the axes (an
+/// AR(1) effective-sample-size correction of parameter variances), held in [1, 100].
+fn coloured_variance_inflation(d: &ResidualDiagnostics) -> f64 {
+    let rho = d
+        .axes
+        .iter()
+        .filter_map(|a| a.autocorrelation.get(1).copied())
+        .filter(|r| r.is_finite())
+        .fold(0.0_f64, f64::max)
+        .min(0.98);
+    ((1.0 + rho) / (1.0 - rho)).clamp(1.0, 100.0)
 }

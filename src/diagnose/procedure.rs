@@ -39,6 +39,10 @@ pub struct DiagnoseOptions {
     pub look_alike: f64,
     /// Most effects added.
     pub max_effects: usize,
+    /// Factor on the parameter variances before the significance test, for coloured
+    /// residuals: with lag-1 residual autocorrelation ρ, about (1 + ρ)/(1 − ρ) (an AR(1)
+    /// effective sample size). 1 for independent samples (sweeps).
+    pub variance_inflation: f64,
 }
 
 impl Default for DiagnoseOptions {
@@ -49,6 +53,7 @@ impl Default for DiagnoseOptions {
             max_loss: 0.25,
             look_alike: 0.1,
             max_effects: 4,
+            variance_inflation: 1.0,
         }
     }
 }
@@ -182,6 +187,7 @@ fn trial(
     stats: &CandidateStatistics,
     params: &[usize],
     options: &FitOptions,
+    inflation: f64,
 ) -> Result<Trial, String> {
     let (structure, cols) = submodel(stats, params);
     let fit_acc = stats.fit.select(&cols);
@@ -191,9 +197,10 @@ fn trial(
         estimate::evaluate(&structure, &fit.mmr.theta, &val_acc).map_err(|e| e.to_string())?;
     let mut std = vec![0.0; structure.params.len()];
     let mut p = vec![1.0; structure.params.len()];
+    let inflation = inflation.max(1.0).sqrt();
     for (est, &i) in fit.mmr.parameters.iter().zip(&fit.mmr.param_index) {
-        std[i] = est.std_error;
-        p[i] = est.p_value;
+        std[i] = est.std_error * inflation;
+        p[i] = crate::estimate::inference::t_test(est.estimate / std[i], fit.mmr.dof).0;
     }
     Ok(Trial {
         theta: fit.mmr.theta.clone(),
@@ -222,7 +229,8 @@ pub fn diagnose(
     options: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let mut added: Vec<usize> = Vec::new();
-    let mut current = trial(stats, &[], fit_options).map_err(DiagnoseError::Fit)?;
+    let mut current =
+        trial(stats, &[], fit_options, options.variance_inflation).map_err(DiagnoseError::Fit)?;
     let before = current.validation;
     let mut steps = Vec::new();
     let mut effects_added = Vec::new();
@@ -335,7 +343,7 @@ fn score(
         min_p: 1.0,
         rejected: String::new(),
     };
-    let t = match trial(stats, &params, fit_options) {
+    let t = match trial(stats, &params, fit_options, options.variance_inflation) {
         Ok(t) => t,
         Err(e) => {
             s.rejected = format!("cannot be estimated: {e}");
