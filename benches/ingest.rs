@@ -134,5 +134,11 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench);
+// Plots off: the crate enables plotters' bundled-font backend (`ab_glyph`), under which
+// criterion's own plots find no font; the numbers are what matter.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);

@@ -81,5 +81,11 @@ fn assembly(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, assembly);
+// Plots off: the crate enables plotters' bundled-font backend (`ab_glyph`), under which
+// criterion's own plots find no font; the numbers are what matter.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = assembly
+}
 criterion_main!(benches);

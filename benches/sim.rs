@@ -90,5 +90,11 @@ fn sweep_and_flight(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, rotor, sweep_and_flight);
+// Plots off: the crate enables plotters' bundled-font backend (`ab_glyph`), under which
+// criterion's own plots find no font; the numbers are what matter.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = rotor, sweep_and_flight
+}
 criterion_main!(benches);

@@ -560,8 +560,10 @@ impl ModelStructure {
         };
         for (j, col) in self.columns.iter().enumerate() {
             let dst = &mut columns[j * cap..j * cap + n];
-            for (i, t) in col.terms.iter().enumerate() {
-                apply_term(dst, t, i == 0, 1.0, &lookup);
+            if !apply_pair_terms(dst, &col.terms, &lookup) {
+                for (i, t) in col.terms.iter().enumerate() {
+                    apply_term(dst, t, i == 0, 1.0, &lookup);
+                }
             }
         }
         for axis in Axis::ALL {
@@ -1073,6 +1075,35 @@ fn signal_slice<'a>(
         RotorAcceleration(i) => &chunk.omega_dot[usize::from(i)][..n],
         _ => &signals[offset..offset + n],
     }
+}
+
+/// Columns of two or three terms that are each a product of two signals (the inflow
+/// corrections, the yaw-moment drag terms) in one fused pass; false when the column has
+/// another shape.
+fn apply_pair_terms<'a>(
+    dst: &mut [f64],
+    terms: &[Term],
+    lookup: &impl Fn(Signal) -> &'a [f64],
+) -> bool {
+    if !(2..=3).contains(&terms.len()) || terms.iter().any(|t| t.factors.len() != 2) {
+        return false;
+    }
+    let pair = |t: &Term| (t.coef, lookup(t.factors[0]), lookup(t.factors[1]));
+    let (c0, a0, b0) = pair(&terms[0]);
+    let (c1, a1, b1) = pair(&terms[1]);
+    let f01 = a0.iter().zip(b0).zip(a1.iter().zip(b1));
+    if let Some(t2) = terms.get(2) {
+        let (c2, a2, b2) = pair(t2);
+        for ((d, ((x0, y0), (x1, y1))), (x2, y2)) in dst.iter_mut().zip(f01).zip(a2.iter().zip(b2))
+        {
+            *d = c0 * x0 * y0 + c1 * x1 * y1 + c2 * x2 * y2;
+        }
+    } else {
+        for (d, ((x0, y0), (x1, y1))) in dst.iter_mut().zip(f01) {
+            *d = c0 * x0 * y0 + c1 * x1 * y1;
+        }
+    }
+    true
 }
 
 /// `dst (=|+=) scale · coef · Π factors`, one vectorisable loop per term.
