@@ -268,24 +268,31 @@ fn densities(d: &ResidualDiagnostics) -> Vec<ResidualDensity> {
 }
 
 /// Ordered residuals at 200 probability levels, read off the histogram's cumulative
-/// distribution, against standard-normal quantiles.
+/// distribution (under- and overflow spread over min..lo and hi..max), against
+/// standard-normal quantiles.
 fn normal_points(d: &ResidualDiagnostics) -> Vec<NormalProbability> {
     let normal = Normal::standard();
     d.axes
         .iter()
         .map(|a| {
             let h = &a.histogram;
-            let n = (h.below + h.above + h.counts.iter().sum::<u64>()).max(1) as f64;
             let width = (h.hi - h.lo) / h.counts.len().max(1) as f64;
+            let mut cells = vec![(h.min, h.lo, h.below)];
+            cells.extend(h.counts.iter().enumerate().map(|(b, &c)| {
+                let lo = h.lo + width * b as f64;
+                (lo, lo + width, c)
+            }));
+            cells.push((h.hi, h.max, h.above));
+            let n = cells.iter().map(|c| c.2).sum::<u64>().max(1) as f64;
             let points = (1..=200)
                 .filter_map(|i| {
                     let p = i as f64 / 201.0;
-                    let mut cum = h.below as f64;
-                    for (b, &c) in h.counts.iter().enumerate() {
+                    let mut cum = 0.0;
+                    for &(lo, hi, c) in &cells {
                         let next = cum + c as f64;
-                        if next / n >= p && c > 0 {
+                        if c > 0 && next / n >= p {
                             let frac = (p * n - cum) / c as f64;
-                            return Some((normal.inverse_cdf(p), h.lo + width * (b as f64 + frac)));
+                            return Some((normal.inverse_cdf(p), lo + (hi - lo) * frac));
                         }
                         cum = next;
                     }

@@ -179,7 +179,11 @@ impl ResidualPass {
         let bins = options.bins.max(1);
         let hist = (0..6)
             .map(|a| {
-                let s = fit.residual_covariance[a][a].sqrt();
+                // The MMR residuals (shared parameters) can be wider than the per-axis
+                // OLS residuals of R: take the larger spread.
+                let s = fit.residual_covariance[a][a]
+                    .sqrt()
+                    .max(fit.metrics[a].rmse);
                 let half = if s > 0.0 {
                     options.range_sigmas * s
                 } else {

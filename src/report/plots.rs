@@ -225,22 +225,27 @@ fn draw_time_histories<DB: DrawingBackend>(
             .label_style((FONT, 16))
             .draw()
             .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(LineSeries::new(
-                decimate(s.t, s.measured),
-                BLACK.stroke_width(1),
-            ))
-            .map_err(|e| e.to_string())?
-            .label("measured")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK));
-        chart
-            .draw_series(LineSeries::new(
-                decimate(s.t, s.predicted),
-                RED.stroke_width(1),
-            ))
-            .map_err(|e| e.to_string())?
-            .label("model")
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], RED));
+        for (values, colour, label) in
+            [(s.measured, BLACK, "measured"), (s.predicted, RED, "model")]
+        {
+            let points = decimate(s.t, values);
+            let mut runs = runs_without_gaps(&points).into_iter();
+            if let Some(first) = runs.next() {
+                chart
+                    .draw_series(LineSeries::new(
+                        first.iter().copied(),
+                        colour.stroke_width(1),
+                    ))
+                    .map_err(|e| e.to_string())?
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour));
+            }
+            for run in runs {
+                chart
+                    .draw_series(LineSeries::new(run.iter().copied(), colour.stroke_width(1)))
+                    .map_err(|e| e.to_string())?;
+            }
+        }
         chart
             .configure_series_labels()
             .label_font((FONT, 16))
@@ -250,6 +255,27 @@ fn draw_time_histories<DB: DrawingBackend>(
             .map_err(|e| e.to_string())?;
     }
     Ok(())
+}
+
+/// Splits a time series where the time step exceeds 5× its median (held-out segments,
+/// logs laid end to end), so no line is drawn across a gap.
+fn runs_without_gaps(points: &[(f64, f64)]) -> Vec<&[(f64, f64)]> {
+    let mut steps: Vec<f64> = points.windows(2).map(|w| w[1].0 - w[0].0).collect();
+    if steps.is_empty() {
+        return vec![points];
+    }
+    steps.sort_by(f64::total_cmp);
+    let limit = 5.0 * steps[steps.len() / 2];
+    let mut runs = Vec::new();
+    let mut start = 0;
+    for i in 1..points.len() {
+        if points[i].0 - points[i - 1].0 > limit {
+            runs.push(&points[start..i]);
+            start = i;
+        }
+    }
+    runs.push(&points[start..]);
+    runs
 }
 
 fn gaussian(x: f64, mean: f64, std: f64) -> f64 {
@@ -339,6 +365,17 @@ fn draw_normal_probability<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn series_break_at_gaps_only() {
+        let mut p: Vec<(f64, f64)> = (0..100).map(|i| (i as f64 * 0.01, 0.0)).collect();
+        p.extend((0..100).map(|i| (5.0 + i as f64 * 0.01, 0.0)));
+        let runs = runs_without_gaps(&p);
+        assert_eq!(
+            runs.iter().map(|r| r.len()).collect::<Vec<_>>(),
+            vec![100, 100]
+        );
+    }
 
     #[test]
     fn decimation_keeps_extremes_and_bounds_point_count() {
