@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use crate::CHUNK_SAMPLES;
 use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis, diagnose, library,
 };
@@ -166,19 +167,53 @@ fn read_log(path: &Path, role: Role, req: &FitRequest) -> Result<LogStats, Pipel
     };
     let mut ws = Workspace::default();
     let mut split = Splitter::new(role);
-    for chunk in reader.by_ref() {
-        let chunk = chunk.map_err(input_error)?;
-        split.route(&chunk, |part, to_validation| {
-            let acc = if to_validation {
-                &mut stats.validation
-            } else {
-                &mut stats.fit
-            };
-            acc.push(&req.structure, part, &mut ws).map_err(input_error)
-        })?;
+    let (fit, validation) = (&mut stats.fit, &mut stats.validation);
+    let mut sink = |part: &SampleChunk, to_validation: bool| {
+        let acc = if to_validation {
+            &mut *validation
+        } else {
+            &mut *fit
+        };
+        acc.push(&req.structure, part, &mut ws).map_err(input_error)
+    };
+    for chunk in coalesce(reader.by_ref()) {
+        split.route(&chunk.map_err(input_error)?, &mut sink)?;
     }
+    split.finish(&mut sink)?;
     stats.summary = reader.summary().clone();
     Ok(stats)
+}
+
+/// Concatenates consecutive chunks of one log (across segment boundaries) into chunks of
+/// at least [`CHUNK_SAMPLES`] samples. The statistics do not depend on chunking, while a
+/// log of one-sample segments (a sweep, whose rows are independent test points) would
+/// otherwise cost one factorisation update per sample. Residual autocorrelation lags then
+/// run across segment joins, a negligible share of the lag products.
+fn coalesce<I>(mut chunks: I) -> impl Iterator<Item = Result<SampleChunk, io::IoError>>
+where
+    I: Iterator<Item = Result<SampleChunk, io::IoError>>,
+{
+    let mut pending: Option<SampleChunk> = None;
+    let mut done = false;
+    std::iter::from_fn(move || {
+        while !done {
+            match chunks.next() {
+                Some(Ok(c)) => {
+                    let buf = pending.get_or_insert_with(SampleChunk::default);
+                    buf.extend_from(&c, 0..c.len());
+                    if buf.len() >= CHUNK_SAMPLES {
+                        return pending.take().map(Ok);
+                    }
+                }
+                Some(Err(e)) => {
+                    done = true;
+                    return Some(Err(e));
+                }
+                None => done = true,
+            }
+        }
+        pending.take().filter(|c| !c.is_empty()).map(Ok)
+    })
 }
 
 /// How a log's samples are used.
@@ -196,7 +231,8 @@ enum Role {
 struct Splitter {
     role: Role,
     t0: Option<f64>,
-    part: SampleChunk,
+    /// Fit and validation samples waiting for a full chunk.
+    parts: [SampleChunk; 2],
 }
 
 impl Splitter {
@@ -204,15 +240,18 @@ impl Splitter {
         Self {
             role,
             t0: None,
-            part: SampleChunk::default(),
+            parts: Default::default(),
         }
     }
 
-    /// Calls `sink(run, to_validation)` for each maximal run of samples of one kind.
+    /// Routes the samples of `chunk` to `sink(part, to_validation)`: whole chunks when
+    /// the log has one role, else runs of one kind gathered into chunks of at least
+    /// [`CHUNK_SAMPLES`] (time order kept within each kind). Call [`Splitter::finish`]
+    /// after the last chunk.
     fn route(
         &mut self,
         chunk: &SampleChunk,
-        mut sink: impl FnMut(&SampleChunk, bool) -> Result<(), PipelineError>,
+        sink: &mut impl FnMut(&SampleChunk, bool) -> Result<(), PipelineError>,
     ) -> Result<(), PipelineError> {
         let holdout = match self.role {
             Role::Fit => return sink(chunk, false),
@@ -230,13 +269,27 @@ impl Splitter {
             while end < chunk.len() && holdout.holds_out(chunk.t[end], t0) == kind {
                 end += 1;
             }
-            if start == 0 && end == chunk.len() {
-                return sink(chunk, kind);
+            let part = &mut self.parts[usize::from(kind)];
+            part.extend_from(chunk, start..end);
+            if part.len() >= CHUNK_SAMPLES {
+                sink(part, kind)?;
+                part.clear();
             }
-            self.part.clear();
-            self.part.extend_from(chunk, start..end);
-            sink(&self.part, kind)?;
             start = end;
+        }
+        Ok(())
+    }
+
+    /// Hands over the samples still waiting.
+    fn finish(
+        &mut self,
+        sink: &mut impl FnMut(&SampleChunk, bool) -> Result<(), PipelineError>,
+    ) -> Result<(), PipelineError> {
+        for (k, part) in self.parts.iter_mut().enumerate() {
+            if !part.is_empty() {
+                sink(part, k == 1)?;
+                part.clear();
+            }
         }
         Ok(())
     }
@@ -403,53 +456,55 @@ fn second_pass(
         let mut reader = open(path, req)?;
         let mut split = Splitter::new(*role);
         let mut span = [(f64::NAN, f64::NAN); 2];
-        for chunk in reader.by_ref() {
-            let chunk = chunk.map_err(input_error)?;
+        let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), PipelineError> {
+            let k = usize::from(to_validation);
             if req.diagnose.is_some() && extended.is_none() {
+                let has_height = part.height.len() == part.len();
                 extended = Some(Extended::new(
                     req,
                     &out.fit,
-                    chunk.height.len() == chunk.len(),
-                    chunk.has_omega_dot(),
+                    has_height,
+                    part.has_omega_dot(),
                 ));
             }
-            split.route(&chunk, |part, to_validation| {
-                let k = usize::from(to_validation);
-                if let Some(ext) = extended.as_mut() {
-                    let acc = if to_validation {
-                        &mut ext.validation
-                    } else {
-                        &mut ext.fit
-                    };
-                    acc.push(&ext.structure, part, &mut ws)
-                        .map_err(input_error)?;
-                }
-                if !to_validation {
-                    pass.push(part, &mut ws).map_err(input_error)?;
-                }
-                let y = model.predict_chunk(part, &mut ws).map_err(input_error)?;
-                let series = if to_validation {
-                    &mut out.validation_series
+            if let Some(ext) = extended.as_mut() {
+                let acc = if to_validation {
+                    &mut ext.validation
                 } else {
-                    &mut out.fit_series
+                    &mut ext.fit
                 };
-                if span[k].0.is_nan() {
-                    span[k].0 = part.t[0];
-                }
-                for (i, &t) in part.t.iter().enumerate() {
-                    if seen[k] % strides[k] == 0 {
-                        series.t.push(t - span[k].0 + t_offset[k]);
-                        for a in Axis::ALL {
-                            series.measured[a as usize].push(part.wrench[a as usize][i]);
-                            series.predicted[a as usize].push(y[a as usize][i]);
-                        }
+                acc.push(&ext.structure, part, &mut ws)
+                    .map_err(input_error)?;
+            }
+            if !to_validation {
+                pass.push(part, &mut ws).map_err(input_error)?;
+            }
+            let y = model.predict_chunk(part, &mut ws).map_err(input_error)?;
+            let series = if to_validation {
+                &mut out.validation_series
+            } else {
+                &mut out.fit_series
+            };
+            if span[k].0.is_nan() {
+                span[k].0 = part.t[0];
+            }
+            for (i, &t) in part.t.iter().enumerate() {
+                if seen[k] % strides[k] == 0 {
+                    series.t.push(t - span[k].0 + t_offset[k]);
+                    for a in Axis::ALL {
+                        series.measured[a as usize].push(part.wrench[a as usize][i]);
+                        series.predicted[a as usize].push(y[a as usize][i]);
                     }
-                    seen[k] += 1;
                 }
-                span[k].1 = part.t[part.len() - 1];
-                Ok(())
-            })?;
+                seen[k] += 1;
+            }
+            span[k].1 = part.t[part.len() - 1];
+            Ok(())
+        };
+        for chunk in coalesce(reader.by_ref()) {
+            split.route(&chunk.map_err(input_error)?, &mut sink)?;
         }
+        split.finish(&mut sink)?;
         // Lay logs end to end on the plots' time axis.
         for k in 0..2 {
             if span[k].0.is_finite() {
