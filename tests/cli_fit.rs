@@ -432,3 +432,57 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
     );
     assert!(a < 0.7 * b, "Mx validation NRMSE {b} -> {a}");
 }
+
+#[test]
+fn diagnosis_on_a_flight_finds_a_rotor_speed_delay_within_one_sample() {
+    // A 30 s flight whose logged rotor speeds lag the true ones by 20 ms (2 log samples
+    // at 100 Hz); the delay must come out within one sample (10 ms).
+    let log = tmp("delay.csv");
+    let out = mrsysid(&[
+        "simulate",
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--mode",
+        "flight",
+        "--duration",
+        "30",
+        "--log-rate",
+        "100",
+        "--effect",
+        "delay=0.02",
+        "--seed",
+        "8",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = tmp("delay.json");
+    let out = mrsysid(&[
+        "fit",
+        log.to_str().unwrap(),
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--json",
+        report.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&report);
+    let first = v["diagnosis"]["effects_added"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["model_completion"] == false)
+        .expect("an effect");
+    assert_eq!(first["name"], "rotor-speed delay");
+    let tau = first["parameters"][0]["estimate"].as_f64().unwrap();
+    assert!((tau - 0.02).abs() < 0.01, "{tau}");
+}

@@ -38,8 +38,7 @@ pub enum EffectKind {
 
 impl EffectKind {
     /// True for completions of the Eq. 22 structure itself (terms its assumptions drop),
-    /// as opposed to effects the vehicle or the log adds: these are tried first, so an
-    /// undeclared effect is ranked against a model that already has them.
+    /// as opposed to effects the vehicle or the log adds; reported as such.
     pub fn is_model_completion(self) -> bool {
         matches!(self, Self::YawRateDrag | Self::LinearVh | Self::CgHeight)
     }

@@ -14,9 +14,11 @@
 //!    least [`DiagnoseOptions::min_gain`] (relative), and no axis gets worse by more
 //!    than [`DiagnoseOptions::max_loss`].
 //!
-//! Among accepted candidates the largest total validation gain wins. Candidates of other
-//! kinds whose gain is within [`DiagnoseOptions::look_alike`] of the winner's are
-//! reported as look-alikes the data cannot tell apart.
+//! Among accepted candidates, completions of the Eq. 22 structure (terms its own
+//! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
+//! effects; within each group the largest total validation gain wins. Candidates of other
+//! kinds in the same group whose gain is within [`DiagnoseOptions::look_alike`] of the
+//! winner's are reported as look-alikes the data cannot tell apart.
 
 use serde::Serialize;
 
@@ -50,7 +52,7 @@ impl Default for DiagnoseOptions {
         Self {
             alpha: 0.01,
             min_gain: 0.05,
-            max_loss: 0.25,
+            max_loss: 0.30,
             look_alike: 0.1,
             max_effects: 4,
             variance_inflation: 1.0,
@@ -244,13 +246,12 @@ pub fn diagnose(
             .map(|&c| score(stats, &added, c, &current, fit_options, options, level))
             .collect();
         // Accepted first; among them completions of the Eq. 22 structure before
-        // undeclared effects; then by validation gain.
+        // undeclared effects (so an effect is judged against a model that already has
+        // the terms its own assumptions drop); then by validation gain.
         scored.sort_by(|a, b| {
             let key = |s: &CandidateScore| {
-                (
-                    s.rejected.is_empty(),
-                    s.rejected.is_empty() && s.kind.is_model_completion(),
-                )
+                let ok = s.rejected.is_empty();
+                (ok, ok && s.kind.is_model_completion())
             };
             key(&a.0)
                 .cmp(&key(&b.0))
