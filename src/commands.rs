@@ -2,6 +2,8 @@
 //! write outputs (each output file written whole or not at all).
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use mrsysid::diagnose::DiagnoseOptions;
 use mrsysid::estimate::{self, FitOptions, ResidualDiagnostics};
@@ -115,8 +117,9 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
             .max(1),
         second_pass: true,
         diagnose: cmd.diagnose.then(DiagnoseOptions::default),
+        progress: None,
     };
-    let out = pipeline::run(&request)?;
+    let out = with_progress(request, cmd.quiet, pipeline::run)?;
     let report = Report::new(
         &vehicle,
         &structure,
@@ -150,6 +153,45 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
         write_plots(dir, &out).map_err(|e| Failure::input(e.to_string()))?;
     }
     Ok(())
+}
+
+/// Runs `job`, showing a spinner with the samples read on stderr once it has taken more
+/// than a second (not with `--quiet`, nor when stderr is not a terminal).
+fn with_progress<T>(mut request: FitRequest, quiet: bool, job: impl FnOnce(&FitRequest) -> T) -> T {
+    use std::io::IsTerminal;
+    if quiet || !std::io::stderr().is_terminal() {
+        return job(&request);
+    }
+    let count = Arc::new(AtomicU64::new(0));
+    request.progress = Some(count.clone());
+    let done = Arc::new(AtomicBool::new(false));
+    let display = {
+        let (count, done) = (count.clone(), done.clone());
+        std::thread::spawn(move || {
+            let start = std::time::Instant::now();
+            let bar = indicatif::ProgressBar::hidden();
+            while !done.load(Ordering::Relaxed) {
+                if start.elapsed() > std::time::Duration::from_secs(1) && bar.is_hidden() {
+                    bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+                    bar.set_style(
+                        indicatif::ProgressStyle::with_template("{spinner} {elapsed} {msg}")
+                            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+                    );
+                }
+                bar.set_message(format!(
+                    "{} samples read (two passes)",
+                    count.load(Ordering::Relaxed)
+                ));
+                bar.tick();
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+            bar.finish_and_clear();
+        })
+    };
+    let result = job(&request);
+    done.store(true, Ordering::Relaxed);
+    let _ = display.join();
+    result
 }
 
 /// The model to save: the diagnosis' augmented model when it added effects.

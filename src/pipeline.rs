@@ -9,8 +9,9 @@
 //! sampled at random.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use crate::CHUNK_SAMPLES;
 use crate::diagnose::{
@@ -83,6 +84,8 @@ pub struct FitRequest {
     pub second_pass: bool,
     /// Run the closing-the-loop diagnosis (in the second pass).
     pub diagnose: Option<DiagnoseOptions>,
+    /// Samples read so far, over both passes, for a progress display.
+    pub progress: Option<Arc<AtomicU64>>,
 }
 
 /// A failure of the pipeline, with the exit code it maps to.
@@ -177,7 +180,9 @@ fn read_log(path: &Path, role: Role, req: &FitRequest) -> Result<LogStats, Pipel
         acc.push(&req.structure, part, &mut ws).map_err(input_error)
     };
     for chunk in coalesce(reader.by_ref()) {
-        split.route(&chunk.map_err(input_error)?, &mut sink)?;
+        let chunk = chunk.map_err(input_error)?;
+        count_progress(req, &chunk);
+        split.route(&chunk, &mut sink)?;
     }
     split.finish(&mut sink)?;
     stats.summary = reader.summary().clone();
@@ -214,6 +219,12 @@ where
         }
         pending.take().filter(|c| !c.is_empty()).map(Ok)
     })
+}
+
+fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
+    if let Some(p) = &req.progress {
+        p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
+    }
 }
 
 /// How a log's samples are used.
@@ -502,7 +513,9 @@ fn second_pass(
             Ok(())
         };
         for chunk in coalesce(reader.by_ref()) {
-            split.route(&chunk.map_err(input_error)?, &mut sink)?;
+            let chunk = chunk.map_err(input_error)?;
+            count_progress(req, &chunk);
+            split.route(&chunk, &mut sink)?;
         }
         split.finish(&mut sink)?;
         // Lay logs end to end on the plots' time axis.

@@ -19,6 +19,9 @@ use serde::Deserialize;
 /// Standard gravity, m/s², used for the hover induced velocity ν0.
 pub const STANDARD_GRAVITY: f64 = 9.80665;
 
+/// Largest rotor count a vehicle may have (rotor indices are stored in one byte).
+pub const MAX_ROTORS: usize = 64;
+
 /// Default tolerance of the Assumption 2 checks, relative to the arm length ℓ (lengths)
 /// or in radians (angles).
 pub const DEFAULT_GEOMETRY_TOLERANCE: f64 = 1e-3;
@@ -628,6 +631,11 @@ fn check_inertia(i: &[[f64; 3]; 3]) -> Result<(), VehicleErrorKind> {
 fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind> {
     let n = rotors.len();
     let fail = |condition, detail| Err(VehicleErrorKind::Assumption2 { condition, detail });
+    if n > MAX_ROTORS {
+        return Err(VehicleErrorKind::Layout(format!(
+            "{n} rotors: at most {MAX_ROTORS} are supported"
+        )));
+    }
     if n < 4 || !n.is_multiple_of(2) {
         return fail(
             "even rotor count N >= 4",

@@ -337,3 +337,21 @@ fn shipped_vehicle_files_load() {
         Vehicle::from_toml_file(std::path::Path::new(&path)).unwrap();
     }
 }
+
+#[test]
+fn too_many_rotors() {
+    let table: Vec<(f64, f64, i64)> = (0..66)
+        .map(|k| {
+            let phi = 2.0 * std::f64::consts::PI * k as f64 / 66.0;
+            (
+                0.5 * phi.cos(),
+                0.5 * phi.sin(),
+                if k % 2 == 0 { 1 } else { -1 },
+            )
+        })
+        .collect();
+    assert_error(
+        &format!("{HEADER}{}", rotors(&table)),
+        &["66 rotors: at most 64 are supported"],
+    );
+}
