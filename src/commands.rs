@@ -317,14 +317,7 @@ fn normal_points(d: &ResidualDiagnostics) -> Vec<NormalProbability> {
     d.axes
         .iter()
         .map(|a| {
-            let h = &a.histogram;
-            let width = (h.hi - h.lo) / h.counts.len().max(1) as f64;
-            let mut cells = vec![(h.min, h.lo, h.below)];
-            cells.extend(h.counts.iter().enumerate().map(|(b, &c)| {
-                let lo = h.lo + width * b as f64;
-                (lo, lo + width, c)
-            }));
-            cells.push((h.hi, h.max, h.above));
+            let cells = a.histogram.cells();
             let n = cells.iter().map(|c| c.2).sum::<u64>().max(1) as f64;
             let points = (1..=200)
                 .filter_map(|i| {

@@ -116,47 +116,6 @@ pub enum Signal {
 }
 
 impl Signal {
-    /// ASCII symbol used in column labels.
-    pub fn symbol(self) -> String {
-        use Signal::*;
-        let fixed = match self {
-            U => "u",
-            V => "v",
-            W => "w",
-            P => "p",
-            Q => "q",
-            R => "r",
-            Vh => "Vh",
-            Dt => "dt",
-            Da => "da",
-            De => "de",
-            Dr => "dr",
-            D2t => "d2t",
-            D2a => "d2a",
-            D2e => "d2e",
-            D2r => "d2r",
-            DrDot => "dr_dot",
-            SumY2Omega => "Sum(y^2 W)",
-            SumXYOmega => "Sum(xy W)",
-            SumX2Omega => "Sum(x^2 W)",
-            SumSigmaYOmega => "Sum(s y W)",
-            SumSigmaXOmega => "Sum(s x W)",
-            AbsU => "|u|",
-            AbsV => "|v|",
-            AbsW => "|w|",
-            GroundEffect => "g_IGE",
-            RotorSpeed(i) => return format!("W{}", i + 1),
-            RotorSpeedSquared(i) => return format!("W{}^2", i + 1),
-            RotorAcceleration(i) => return format!("W{}_dot", i + 1),
-            WakeImmersion(i) => return format!("wake{}", i + 1),
-            VortexRing(i) => return format!("vrs{}", i + 1),
-            SquaredActuatorRate(row) => {
-                return format!("d2{}_dot", ["t", "a", "e", "r"][usize::from(row) % 4]);
-            }
-        };
-        fixed.to_string()
-    }
-
     /// True when the signal is read straight from the chunk (no computation).
     fn is_direct(self) -> bool {
         use Signal::*;

@@ -3,37 +3,16 @@
 //! its name says. Tolerance 1e-9 relative to the effect's own size: both sides are a few
 //! dozen products; a wrong sign, lever arm or rotor shows at ≥ 1e-2.
 
+mod closed_form_common;
+
+use closed_form_common::{BLADE, vehicle};
 use mrsysid::airframe::{closed_form_wrench, cross};
 use mrsysid::diagnose::{CandidateContext, EffectKind, library};
 use mrsysid::model::{ModelOptions, ModelStructure};
-use mrsysid::rotor::BladeConstants;
 use mrsysid::sample::Sample;
-use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::vehicle::{Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
-
-fn vehicle(preset: Preset) -> Vehicle {
-    let props = MassAndRotorProperties {
-        mass: 1.2,
-        inertia: [[0.011, 0.0, 0.0], [0.0, 0.012, 0.0], [0.0, 0.0, 0.021]],
-        air_density: 1.225,
-        rotor_radius: 0.0635,
-        hub_height: 0.02,
-        rotor_inertia: 3e-5,
-    };
-    Vehicle::preset("q", preset, 0.225, 1.0, props).unwrap()
-}
-
-const BLADE: BladeConstants = BladeConstants {
-    blades: 2.0,
-    chord: 0.012,
-    lift_slope: 5.7,
-    mean_drag: 0.012,
-    theta0: 0.35,
-    theta_tw: -0.12,
-    c_nu_mu: -0.1,
-    c_nu_w: 0.3,
-};
 
 fn samples(n_rotors: usize, n: usize) -> Vec<Sample> {
     let mut rng = StdRng::seed_from_u64(3);

@@ -37,6 +37,71 @@ fn axis_metric(v: &serde_json::Value, part: &str, axis: &str, key: &str) -> f64 
         .unwrap()
 }
 
+/// The first undeclared effect (not a completion of Eq. 22's own assumptions) in a
+/// report's diagnosis.
+fn first_effect(diagnosis: &serde_json::Value) -> &serde_json::Value {
+    diagnosis["effects_added"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["model_completion"] == false)
+        .expect("an undeclared effect was added")
+}
+
+/// Estimate of parameter `name` of an effect row.
+fn effect_parameter(effect: &serde_json::Value, name: &str) -> f64 {
+    effect["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == name)
+        .unwrap()["estimate"]
+        .as_f64()
+        .unwrap()
+}
+
+/// Simulates a 30 s quad× flight logged at 100 Hz with `extra` simulate arguments, fits
+/// it with the diagnosis, and returns the JSON report.
+fn simulate_and_fit(name: &str, extra: &[&str]) -> serde_json::Value {
+    let log = tmp(&format!("{name}.csv"));
+    let mut args = vec![
+        "simulate",
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--mode",
+        "flight",
+        "--duration",
+        "30",
+        "--log-rate",
+        "100",
+        "--out",
+        log.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let out = mrsysid(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = tmp(&format!("{name}.json"));
+    let out = mrsysid(&[
+        "fit",
+        log.to_str().unwrap(),
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--json",
+        report.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    json(&report)
+}
+
 #[test]
 fn fit_on_shipped_sweeps_meets_fit_quality_bounds() {
     // Sweeps of the blade-element truth (no undeclared effect) over the scaled Table 1
@@ -147,12 +212,7 @@ fn diagnosis_finds_the_undeclared_drag_in_the_shipped_flight() {
     let d = &v["diagnosis"];
     // Completions of Eq. 22's own assumptions (e.g. yaw-rate rotor drag, which the
     // simulator has) may come first; the first undeclared effect must be the drag.
-    let first = d["effects_added"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|e| e["model_completion"] == false)
-        .expect("an undeclared effect was added");
+    let first = first_effect(d);
     assert_eq!(first["name"], "quadratic airframe drag");
     let area_x = first["parameters"][0]["estimate"].as_f64().unwrap();
     // Drag area along x recovered within 10 % of 0.012 m² (measured: 2 %).
@@ -365,67 +425,26 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
     // A 30 s aggressive flight logged like a real vehicle (gyro and accelerometer noise
     // and bias, quantised eRPM, no force/moment columns: F = m a, M = I ω̇ + ω × Iω are
     // derived on read), with the true CG 10 mm forward and 8 mm left of the reference.
-    let log = tmp("imu_cg.csv");
-    let out = mrsysid(&[
-        "simulate",
-        "--vehicle",
-        "data/vehicles/quad_x.toml",
-        "--mode",
-        "flight",
-        "--duration",
-        "30",
-        "--log-rate",
-        "100",
-        "--imu-only",
-        "--effect",
-        "cg_offset=0.01,-0.008,0",
-        "--seed",
-        "7",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let v = simulate_and_fit(
+        "imu_cg",
+        &[
+            "--imu-only",
+            "--effect",
+            "cg_offset=0.01,-0.008,0",
+            "--seed",
+            "7",
+        ],
     );
-    let report = tmp("imu_cg.json");
-    let out = mrsysid(&[
-        "fit",
-        log.to_str().unwrap(),
-        "--vehicle",
-        "data/vehicles/quad_x.toml",
-        "--json",
-        report.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v = json(&report);
     let d = &v["diagnosis"];
-    let first = d["effects_added"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|e| e["model_completion"] == false)
-        .expect("an effect");
+    let first = first_effect(d);
     assert_eq!(first["name"], "CG offset");
-    let p = |name: &str| {
-        first["parameters"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| p["name"] == name)
-            .unwrap()["estimate"]
-            .as_f64()
-            .unwrap()
-    };
+    let (dx, dy) = (
+        effect_parameter(first, "cg_dx"),
+        effect_parameter(first, "cg_dy"),
+    );
     // Within 10 % (measured on a 60 s flight: 9.4 mm and −7.6 mm).
-    assert!((p("cg_dx") - 0.010).abs() < 0.001, "{}", p("cg_dx"));
-    assert!((p("cg_dy") + 0.008).abs() < 0.0008, "{}", p("cg_dy"));
+    assert!((dx - 0.010).abs() < 0.001, "{dx}");
+    assert!((dy + 0.008).abs() < 0.0008, "{dy}");
     let (b, a) = (
         axis_metric(d, "before", "Mx", "nrmse"),
         axis_metric(d, "after", "Mx", "nrmse"),
@@ -437,52 +456,9 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
 fn diagnosis_on_a_flight_finds_a_rotor_speed_delay_within_one_sample() {
     // A 30 s flight whose logged rotor speeds lag the true ones by 20 ms (2 log samples
     // at 100 Hz); the delay must come out within one sample (10 ms).
-    let log = tmp("delay.csv");
-    let out = mrsysid(&[
-        "simulate",
-        "--vehicle",
-        "data/vehicles/quad_x.toml",
-        "--mode",
-        "flight",
-        "--duration",
-        "30",
-        "--log-rate",
-        "100",
-        "--effect",
-        "delay=0.02",
-        "--seed",
-        "8",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report = tmp("delay.json");
-    let out = mrsysid(&[
-        "fit",
-        log.to_str().unwrap(),
-        "--vehicle",
-        "data/vehicles/quad_x.toml",
-        "--json",
-        report.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v = json(&report);
-    let first = v["diagnosis"]["effects_added"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|e| e["model_completion"] == false)
-        .expect("an effect");
+    let v = simulate_and_fit("delay", &["--effect", "delay=0.02", "--seed", "8"]);
+    let first = first_effect(&v["diagnosis"]);
     assert_eq!(first["name"], "rotor-speed delay");
-    let tau = first["parameters"][0]["estimate"].as_f64().unwrap();
+    let tau = effect_parameter(first, "rotor_speed_delay");
     assert!((tau - 0.02).abs() < 0.01, "{tau}");
 }

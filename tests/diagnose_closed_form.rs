@@ -2,42 +2,21 @@
 //! and measurement noise: the effect is found, ranked first, and its parameter
 //! recovered; clean data gets no effect.
 
+mod closed_form_common;
+
+use closed_form_common::{BLADE, vehicle};
 use mrsysid::airframe::{closed_form_wrench, cross};
 use mrsysid::diagnose::{
     CandidateContext, CandidateStatistics, DiagnoseOptions, diagnose, library,
 };
 use mrsysid::estimate::{FitOptions, fit};
 use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::rotor::BladeConstants;
 use mrsysid::sample::{Sample, SampleChunk};
 use mrsysid::stats::Accumulator;
-use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::vehicle::{Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};
-
-const BLADE: BladeConstants = BladeConstants {
-    blades: 2.0,
-    chord: 0.012,
-    lift_slope: 5.7,
-    mean_drag: 0.012,
-    theta0: 0.35,
-    theta_tw: -0.12,
-    c_nu_mu: -0.1,
-    c_nu_w: 0.3,
-};
-
-fn vehicle() -> Vehicle {
-    let props = MassAndRotorProperties {
-        mass: 1.2,
-        inertia: [[0.011, 0.0, 0.0], [0.0, 0.012, 0.0], [0.0, 0.0, 0.021]],
-        air_density: 1.225,
-        rotor_radius: 0.0635,
-        hub_height: 0.02,
-        rotor_inertia: 3e-5,
-    };
-    Vehicle::preset("q", Preset::QuadX, 0.225, 1.0, props).unwrap()
-}
 
 /// `n` random states with truth wrench `truth(sample, closed-form wrench)` plus white
 /// noise of 1 % of each axis' typical size.
@@ -86,7 +65,7 @@ fn data(
 }
 
 fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::diagnose::Diagnosis {
-    let v = vehicle();
+    let v = vehicle(Preset::QuadX);
     let base = ModelStructure::eq22(&v, ModelOptions::default());
     let (fit_data, val_data) = (data(&v, 1, 6000, truth), data(&v, 2, 2000, truth));
     let mut ws = Workspace::default();
@@ -125,7 +104,7 @@ fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::diagnose::Diag
 
 #[test]
 fn weak_rotor_is_found_and_its_loss_recovered() {
-    let v = vehicle();
+    let v = vehicle(Preset::QuadX);
     let nu0 = v.hover_induced_velocity();
     let d = run(&|s, b| {
         // Rotor 3 thrust −8 %.

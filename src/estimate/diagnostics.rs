@@ -73,6 +73,22 @@ pub struct Histogram {
     pub max: f64,
 }
 
+impl Histogram {
+    /// `(lower edge, upper edge, count)` of every cell in order, the underflow cell
+    /// spanning min..lo and the overflow cell hi..max (N or N m).
+    pub fn cells(&self) -> Vec<(f64, f64, u64)> {
+        let width = (self.hi - self.lo) / self.counts.len().max(1) as f64;
+        let mut cells = Vec::with_capacity(self.counts.len() + 2);
+        cells.push((self.min, self.lo, self.below));
+        cells.extend(self.counts.iter().enumerate().map(|(b, &c)| {
+            let lo = self.lo + b as f64 * width;
+            (lo, lo + width, c)
+        }));
+        cells.push((self.hi, self.max, self.above));
+        cells
+    }
+}
+
 /// Residual diagnostics of one axis.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AxisResiduals {
@@ -603,14 +619,7 @@ fn sandwich6(w: &[[f64; 6]; 6], g: &[[f64; 6]; 6]) -> [[f64; 6]; 6] {
 fn normal_probability_correlation(h: &Histogram, count: u64) -> f64 {
     let normal = Normal::new(0.0, 1.0).expect("standard normal");
     let n = count as f64;
-    let width = (h.hi - h.lo) / h.counts.len() as f64;
-    let mut cells: Vec<(f64, f64, u64)> = Vec::with_capacity(h.counts.len() + 2);
-    cells.push((h.min, h.lo, h.below));
-    for (b, &c) in h.counts.iter().enumerate() {
-        let lo = h.lo + b as f64 * width;
-        cells.push((lo, lo + width, c));
-    }
-    cells.push((h.hi, h.max, h.above));
+    let cells = h.cells();
     let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let mut rank = 0u64;
     for (lo, hi, c) in cells {
