@@ -15,7 +15,8 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use crate::CHUNK_SAMPLES;
 use crate::diagnose::{
-    Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis, diagnose, library,
+    Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
+    SCREENING_SAMPLES, Thinned, candidate_set, diagnose,
 };
 use crate::estimate::{
     self, AxisMetrics, DiagnosticOptions, Fit, FitOptions, ResidualDiagnostics, ResidualPass,
@@ -149,6 +150,8 @@ pub struct FitOutcome {
 struct LogStats {
     fit: Accumulator,
     validation: Accumulator,
+    /// Thinned fit samples for the generic-pool screening.
+    screening: Thinned,
     summary: Summary,
 }
 
@@ -166,15 +169,21 @@ fn read_log(path: &Path, role: Role, req: &FitRequest) -> Result<LogStats, Pipel
     let mut stats = LogStats {
         fit: Accumulator::new(&req.structure),
         validation: Accumulator::new(&req.structure),
+        screening: Thinned::new(SCREENING_SAMPLES),
         summary: Summary::default(),
     };
     let mut ws = Workspace::default();
     let mut split = Splitter::new(role);
     let (fit, validation) = (&mut stats.fit, &mut stats.validation);
+    let screening = &mut stats.screening;
+    let keep_screening = req.diagnose.is_some();
     let mut sink = |part: &SampleChunk, to_validation: bool| {
         let acc = if to_validation {
             &mut *validation
         } else {
+            if keep_screening {
+                screening.push(part);
+            }
             &mut *fit
         };
         acc.push(&req.structure, part, &mut ws).map_err(input_error)
@@ -357,10 +366,12 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
     let per_log = read_all(&jobs, req)?;
     let mut fit_stats = Accumulator::new(&req.structure);
     let mut validation_stats = Accumulator::new(&req.structure);
+    let mut screening = Thinned::new(SCREENING_SAMPLES);
     let mut summaries = Vec::new();
     for s in per_log {
         fit_stats.merge(&s.fit).map_err(input_error)?;
         validation_stats.merge(&s.validation).map_err(input_error)?;
+        screening.merge(&s.screening);
         summaries.push(s.summary);
     }
     if fit_stats.count() == 0 {
@@ -396,7 +407,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
         diagnosis: None,
     };
     if req.second_pass || req.diagnose.is_some() {
-        second_pass(req, &jobs, &mut outcome)?;
+        second_pass(req, &jobs, screening.samples(), &mut outcome)?;
     }
     Ok(outcome)
 }
@@ -414,7 +425,14 @@ struct Extended {
 }
 
 impl Extended {
-    fn new(req: &FitRequest, fit: &Fit, has_height: bool, has_omega_dot: bool) -> Self {
+    fn new(
+        req: &FitRequest,
+        fit: &Fit,
+        has_height: bool,
+        has_omega_dot: bool,
+        screening: &SampleChunk,
+        options: &DiagnoseOptions,
+    ) -> Result<Self, PipelineError> {
         let ctx = CandidateContext {
             vehicle: &req.vehicle,
             structure: &req.structure,
@@ -422,21 +440,14 @@ impl Extended {
             has_height,
             has_omega_dot,
         };
-        let candidates = library(&ctx);
-        let mut structure = req.structure.clone();
-        let params = candidates
-            .iter()
-            .map(|c| c.add_to(&mut structure))
-            .collect();
-        let fit = Accumulator::new(&structure);
-        let validation = Accumulator::new(&structure);
-        Self {
-            structure,
-            candidates,
-            params,
-            fit,
-            validation,
-        }
+        let set = candidate_set(&ctx, Some(screening), options).map_err(input_error)?;
+        Ok(Self {
+            fit: Accumulator::new(&set.extended),
+            validation: Accumulator::new(&set.extended),
+            structure: set.extended,
+            candidates: set.candidates,
+            params: set.params,
+        })
     }
 }
 
@@ -445,6 +456,7 @@ impl Extended {
 fn second_pass(
     req: &FitRequest,
     jobs: &[(PathBuf, Role)],
+    screening: &SampleChunk,
     out: &mut FitOutcome,
 ) -> Result<(), PipelineError> {
     let mut pass = ResidualPass::new(&req.structure, &out.fit, DiagnosticOptions::default());
@@ -469,14 +481,16 @@ fn second_pass(
         let mut span = [(f64::NAN, f64::NAN); 2];
         let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), PipelineError> {
             let k = usize::from(to_validation);
-            if req.diagnose.is_some() && extended.is_none() {
+            if let (Some(options), None) = (&req.diagnose, &extended) {
                 let has_height = part.height.len() == part.len();
                 extended = Some(Extended::new(
                     req,
                     &out.fit,
                     has_height,
                     part.has_omega_dot(),
-                ));
+                    screening,
+                    options,
+                )?);
             }
             if let Some(ext) = extended.as_mut() {
                 let acc = if to_validation {

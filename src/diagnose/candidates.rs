@@ -34,13 +34,34 @@ pub enum EffectKind {
     RotorSpeedDelay,
     /// In-plane rotor velocity from the yaw rate (dropped by Assumption 4).
     YawRateDrag,
+    /// In-plane hub velocity from the roll and pitch rates at hub height.
+    RollPitchRateDrag,
+    /// Unmeasured steady wind: the logged velocity is not the airspeed.
+    SteadyWind,
+    /// Residual structure with no physical name (the generic pool).
+    Generic,
 }
 
 impl EffectKind {
     /// True for completions of the Eq. 22 structure itself (terms its assumptions drop),
     /// as opposed to effects the vehicle or the log adds; reported as such.
     pub fn is_model_completion(self) -> bool {
-        matches!(self, Self::YawRateDrag | Self::LinearVh | Self::CgHeight)
+        matches!(
+            self,
+            Self::YawRateDrag | Self::RollPitchRateDrag | Self::LinearVh | Self::CgHeight
+        )
+    }
+
+    /// Order in which accepted candidates are preferred: completions of Eq. 22 (2), then
+    /// named physical effects (1), then the generic pool (0).
+    pub fn priority(self) -> u8 {
+        if self.is_model_completion() {
+            2
+        } else if self == Self::Generic {
+            0
+        } else {
+            1
+        }
     }
 }
 
@@ -300,6 +321,9 @@ pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
         out.push(delay(ctx));
     }
     out.push(yaw_rate_drag(ctx));
+    if ctx.vehicle.props.hub_height != 0.0 {
+        out.push(roll_pitch_rate_drag(ctx));
+    }
     out
 }
 
@@ -516,6 +540,53 @@ fn yaw_rate_drag(ctx: &CandidateContext) -> Candidate {
                     vec![term(-k * nu0 * l2 * n, &[R])],
                 )],
             ),
+        ],
+    }
+}
+
+/// Hub in-plane velocity from the roll and pitch rates at hub height h (Eq. 18 with the
+/// hubs at z = −h: u_i = u − q h, v_i = v + p h): the Eq. 22a–b H-force terms gain
+/// q h, −p h and, through the hub-force lever arm h, roll and pitch damping −h² p, −h² q.
+fn roll_pitch_rate_drag(ctx: &CandidateContext) -> Candidate {
+    use Signal::*;
+    let kn = ctx.k() * ctx.vehicle.rotor_count() as f64;
+    let r = ctx.vehicle.props.rotor_radius;
+    let h = ctx.vehicle.props.hub_height;
+    let nu0 = ctx.vehicle.hover_induced_velocity();
+    // Coefficient of (Fx, Fy, Mx, My) per unit of the lumped parameter and its signal.
+    let columns = |scale: f64, with: &[Signal], label: &str| {
+        let with_q: Vec<Signal> = [&[Q][..], with].concat();
+        let with_p: Vec<Signal> = [&[P][..], with].concat();
+        vec![
+            column(
+                Axis::Fx,
+                &format!("h*q*{label}"),
+                vec![term(kn * scale * h, &with_q)],
+            ),
+            column(
+                Axis::Fy,
+                &format!("-h*p*{label}"),
+                vec![term(-kn * scale * h, &with_p)],
+            ),
+            column(
+                Axis::Mx,
+                &format!("-h^2*p*{label}"),
+                vec![term(-kn * scale * h * h, &with_p)],
+            ),
+            column(
+                Axis::My,
+                &format!("-h^2*q*{label}"),
+                vec![term(-kn * scale * h * h, &with_q)],
+            ),
+        ]
+    };
+    Candidate {
+        kind: EffectKind::RollPitchRateDrag,
+        name: "roll/pitch-rate rotor drag".into(),
+        physics: "Rolling and pitching move the hubs, which sit h above the CG, sideways at p h and q h; the rotors' H-force on that velocity couples the rates into Fx and Fy and damps roll and pitch through the same lever arm.",
+        parameters: vec![
+            parameter("C_H_mub_pq", "-", columns(r, &[Dt], "dt")),
+            parameter("C_H_mub_mu0_pq", "-", columns(nu0, &[], "nu0")),
         ],
     }
 }

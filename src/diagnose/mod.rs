@@ -3,15 +3,65 @@
 //! data not used to fit.
 
 pub mod candidates;
+pub mod generic;
 pub mod procedure;
 
 pub use candidates::{Candidate, CandidateContext, CandidateParameter, EffectKind, library};
+pub use generic::{SCREENING_SAMPLES, Thinned};
 pub use procedure::{
     CandidateScore, CandidateStatistics, DiagnoseError, DiagnoseOptions, Diagnosis, DiagnosisStep,
     EffectParameter, diagnose, diagnose_chunks,
 };
 
-use crate::model::{ModelStructure, Parameter};
+use crate::model::{ModelError, ModelStructure, Parameter};
+use crate::sample::SampleChunk;
+
+/// Every candidate of one diagnosis, added to the base structure.
+pub struct CandidateSet {
+    /// Base structure followed by every candidate's parameters.
+    pub extended: ModelStructure,
+    /// Named candidates first, then the generic-pool survivors.
+    pub candidates: Vec<Candidate>,
+    /// Parameter indices in `extended` of each candidate.
+    pub params: Vec<Vec<usize>>,
+    /// The generic-pool screening, best first per axis.
+    pub screened: Vec<generic::Screened>,
+}
+
+/// The named library for `ctx` plus the generic-pool monomials that survive screening
+/// on `screening_data` (a thinned sample of the fit data; no screening when `None`).
+pub fn candidate_set(
+    ctx: &CandidateContext,
+    screening_data: Option<&SampleChunk>,
+    options: &DiagnoseOptions,
+) -> Result<CandidateSet, ModelError> {
+    let mut candidates = library(ctx);
+    let mut extended = ctx.structure.clone();
+    let mut params: Vec<Vec<usize>> = candidates.iter().map(|c| c.add_to(&mut extended)).collect();
+    let screened = match screening_data {
+        Some(data) if !data.is_empty() => generic::screen(
+            &extended,
+            data,
+            &generic::ScreeningOptions {
+                alpha: options.alpha,
+                min_drop: options.min_gain,
+                ..Default::default()
+            },
+        )?,
+        _ => Vec::new(),
+    };
+    for s in &screened {
+        let c = s.candidate();
+        params.push(c.add_to(&mut extended));
+        candidates.push(c);
+    }
+    Ok(CandidateSet {
+        extended,
+        candidates,
+        params,
+        screened,
+    })
+}
 
 impl Candidate {
     /// Adds the candidate's parameters and columns to `structure`; returns the new

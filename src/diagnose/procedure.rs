@@ -8,7 +8,7 @@
 //!
 //! A candidate is accepted when
 //! 1. its MMR estimates are significant: the smallest P-value of its parameters is below
-//!    α / (number of candidates scored in the step) (Bonferroni);
+//!    α / (number of named candidates scored in the step) (Bonferroni);
 //! 2. it is plausible: every estimate lies in the physical range of its parameter;
 //! 3. it pays on validation data: on some axis it acts on, validation NRMSE falls by at
 //!    least [`DiagnoseOptions::min_gain`] (relative), and no axis gets worse by more
@@ -16,9 +16,11 @@
 //!
 //! Among accepted candidates, completions of the Eq. 22 structure (terms its own
 //! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
-//! effects; within each group the largest total validation gain wins. Candidates of other
-//! kinds in the same group whose gain is within [`DiagnoseOptions::look_alike`] of the
-//! winner's are reported as look-alikes the data cannot tell apart.
+//! named effects, and those before terms of the generic pool ([`super::generic`]:
+//! residual structure with no name, whose Bonferroni divisor is the whole pool it was
+//! screened from); within each group the largest total validation gain wins. Candidates
+//! of other kinds in the same group whose gain is within [`DiagnoseOptions::look_alike`]
+//! of the winner's are reported as look-alikes the data cannot tell apart.
 
 use serde::Serialize;
 
@@ -54,7 +56,7 @@ impl Default for DiagnoseOptions {
             min_gain: 0.05,
             max_loss: 0.30,
             look_alike: 0.1,
-            max_effects: 4,
+            max_effects: 8,
             variance_inflation: 1.0,
         }
     }
@@ -240,18 +242,28 @@ pub fn diagnose(
         let remaining: Vec<usize> = (0..stats.candidates.len())
             .filter(|c| !added.contains(c))
             .collect();
-        let level = options.alpha / remaining.len().max(1) as f64;
+        // Bonferroni: named candidates over those still in play; generic ones over the
+        // whole pool they were screened from.
+        let named = remaining
+            .iter()
+            .filter(|&&c| stats.candidates[c].kind != EffectKind::Generic)
+            .count();
+        let level = |c: usize| match stats.candidates[c].kind {
+            EffectKind::Generic => options.alpha / super::generic::pool_size() as f64,
+            _ => options.alpha / named.max(1) as f64,
+        };
         let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> = remaining
             .iter()
-            .map(|&c| score(stats, &added, c, &current, fit_options, options, level))
+            .map(|&c| score(stats, &added, c, &current, fit_options, options, level(c)))
             .collect();
         // Accepted first; among them completions of the Eq. 22 structure before
         // undeclared effects (so an effect is judged against a model that already has
-        // the terms its own assumptions drop); then by validation gain.
+        // the terms its own assumptions drop), and named effects before generic terms;
+        // then by validation gain.
         scored.sort_by(|a, b| {
             let key = |s: &CandidateScore| {
                 let ok = s.rejected.is_empty();
-                (ok, ok && s.kind.is_model_completion())
+                (ok, if ok { s.kind.priority() } else { 0 })
             };
             key(&a.0)
                 .cmp(&key(&b.0))
@@ -270,7 +282,7 @@ pub fn diagnose(
                     .filter(|s| {
                         s.0.rejected.is_empty()
                             && s.0.kind != best.kind
-                            && s.0.kind.is_model_completion() == best.kind.is_model_completion()
+                            && s.0.kind.priority() == best.kind.priority()
                             && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
                     })
                     .map(|s| s.0.name.clone())
@@ -435,9 +447,10 @@ pub fn diagnose_chunks(
         has_height: first.is_some_and(|c| c.height.len() == c.len() && !c.is_empty()),
         has_omega_dot: first.is_some_and(|c| c.has_omega_dot()),
     };
-    let candidates = super::library(&ctx);
-    let mut extended = base.clone();
-    let params: Vec<Vec<usize>> = candidates.iter().map(|c| c.add_to(&mut extended)).collect();
+    let mut thinned = super::Thinned::new(super::SCREENING_SAMPLES);
+    fit_data.iter().for_each(|c| thinned.push(c));
+    let set = super::candidate_set(&ctx, Some(thinned.samples()), options).map_err(|e| err(&e))?;
+    let extended = set.extended;
     let (mut fa, mut va) = (Accumulator::new(&extended), Accumulator::new(&extended));
     for (acc, data) in [(&mut fa, fit_data), (&mut va, validation_data)] {
         for c in data {
@@ -446,8 +459,8 @@ pub fn diagnose_chunks(
     }
     let stats = CandidateStatistics {
         extended: &extended,
-        candidates: &candidates,
-        candidate_params: &params,
+        candidates: &set.candidates,
+        candidate_params: &set.params,
         base_params: base.params.len(),
         fit: &fa,
         validation: &va,

@@ -76,6 +76,9 @@ pub struct EffectRow {
     /// True for a completion of the Eq. 22 structure (a term its assumptions drop), false
     /// for an undeclared effect of the vehicle or log.
     pub model_completion: bool,
+    /// True for a term of the generic pool: residual structure with no physical name.
+    #[serde(default)]
+    pub generic: bool,
     /// Axes it acts on.
     pub axes: Vec<Axis>,
     /// Its parameters.
@@ -117,6 +120,7 @@ impl From<&CandidateScore> for EffectRow {
         Self {
             name: c.name.clone(),
             model_completion: c.kind.is_model_completion(),
+            generic: c.kind == crate::diagnose::EffectKind::Generic,
             axes: c.axes.clone(),
             parameters: c
                 .parameters

@@ -80,6 +80,8 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
         let axes: Vec<&str> = e.axes.iter().map(|a| a.name()).collect();
         let what = if e.model_completion {
             "model completion"
+        } else if e.generic {
+            "unnamed structure (generic pool)"
         } else {
             "effect"
         };

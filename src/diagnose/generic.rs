@@ -1,0 +1,413 @@
+//! The generic pool: residual structure that no named effect explains.
+//!
+//! The pool holds every monomial of degree 0 to 3 in the body velocities u, v, w, the
+//! rates p, q, r and the virtual actuators δt, δa, δe, δr (Eq. 21): 286 monomials per
+//! axis, 1716 hypotheses in all. Accumulating them all next to the named candidates would
+//! multiply the cost of the streaming statistics by ~50, so the pool is *screened* on a
+//! decimated sample of the fit data held in memory:
+//!
+//! 1. per axis, the Eq. 22 columns and every named candidate's columns are
+//!    orthonormalised (Gram–Schmidt, twice) and the output is projected off them;
+//! 2. each monomial g is scored by the residual-sum-of-squares drop it would bring,
+//!    (gᵀr)² / ‖g − QQᵀg‖² (a partial F with one degree of freedom);
+//! 3. the best monomial is kept when it is significant at α over the whole pool
+//!    (Bonferroni over 1716 tests) and cuts the residual sum of squares by at least
+//!    `min_drop`; it joins the basis, and the axis is screened again, up to
+//!    `per_axis` monomials.
+//!
+//! Survivors become ordinary candidates of kind [`EffectKind::Generic`]: they are
+//! accumulated over the full data with the named candidates and must pass the same
+//! significance, plausibility and validation tests, after every named candidate that
+//! passes (named effects are preferred whenever they explain as much).
+//!
+//! Each survivor's column is the monomial divided by its RMS on the screening sample, so
+//! its parameter reads in the axis unit: the load at one RMS of the monomial.
+
+use super::candidates::{Candidate, CandidateParameter, EffectKind};
+use crate::model::{Column, ModelError, ModelStructure, Parameter, Signal, Workspace, term};
+use crate::sample::{Axis, SampleChunk};
+
+/// The pool's variables: states and virtual actuators.
+const VARIABLES: [(Signal, &str); 10] = [
+    (Signal::U, "u"),
+    (Signal::V, "v"),
+    (Signal::W, "w"),
+    (Signal::P, "p"),
+    (Signal::Q, "q"),
+    (Signal::R, "r"),
+    (Signal::Dt, "dt"),
+    (Signal::Da, "da"),
+    (Signal::De, "de"),
+    (Signal::Dr, "dr"),
+];
+
+/// Samples of the fit data the pipeline keeps in memory for screening (~4 MB for a quad).
+pub const SCREENING_SAMPLES: usize = 20_000;
+
+/// Highest monomial degree in the pool.
+pub const MAX_DEGREE: usize = 3;
+
+/// Thresholds of the screening.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScreeningOptions {
+    /// Family-wise significance level over the whole pool (all axes).
+    pub alpha: f64,
+    /// Smallest relative drop of the axis's residual sum of squares worth keeping.
+    pub min_drop: f64,
+    /// Most monomials kept per axis.
+    pub per_axis: usize,
+}
+
+impl Default for ScreeningOptions {
+    fn default() -> Self {
+        Self {
+            alpha: 0.01,
+            min_drop: 0.05,
+            per_axis: 2,
+        }
+    }
+}
+
+/// Exponents of every monomial of degree ≤ [`MAX_DEGREE`] (as variable index lists,
+/// non-decreasing), the constant first.
+pub fn monomials() -> Vec<Vec<usize>> {
+    let mut out = vec![Vec::new()];
+    let mut frontier = vec![Vec::new()];
+    for _ in 0..MAX_DEGREE {
+        let mut next = Vec::new();
+        for m in &frontier {
+            let start = m.last().copied().unwrap_or(0);
+            for v in start..VARIABLES.len() {
+                let mut n: Vec<usize> = m.clone();
+                n.push(v);
+                next.push(n);
+            }
+        }
+        out.extend(next.iter().cloned());
+        frontier = next;
+    }
+    out
+}
+
+/// Number of hypotheses the pool tests (monomials × axes): the Bonferroni divisor.
+pub fn pool_size() -> usize {
+    monomials().len() * Axis::ALL.len()
+}
+
+fn label(m: &[usize]) -> String {
+    if m.is_empty() {
+        return "1".into();
+    }
+    m.iter()
+        .map(|&v| VARIABLES[v].1)
+        .collect::<Vec<_>>()
+        .join("*")
+}
+
+/// Monomial values on `data`, column-major (`len` values per monomial).
+fn evaluate(
+    like: &ModelStructure,
+    pool: &[Vec<usize>],
+    data: &SampleChunk,
+) -> Result<Vec<Vec<f64>>, ModelError> {
+    let (mut s, _) = like.subset(&[]);
+    for m in pool {
+        let factors: Vec<Signal> = m.iter().map(|&v| VARIABLES[v].0).collect();
+        let column = Column {
+            axis: Axis::Fx,
+            param: 0,
+            label: label(m),
+            terms: vec![term(1.0, &factors)],
+        };
+        let name = format!("m{}", s.params.len());
+        s.add_parameter(
+            Parameter {
+                name,
+                unit: "-".into(),
+            },
+            vec![column],
+        );
+    }
+    let mut ws = Workspace::default();
+    s.assemble(data, &mut ws)?;
+    Ok((0..pool.len()).map(|j| ws.column(j).to_vec()).collect())
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Orthonormal basis of columns added one at a time (Gram–Schmidt, applied twice).
+struct Basis {
+    q: Vec<Vec<f64>>,
+}
+
+impl Basis {
+    /// Adds `x`'s component orthogonal to the basis, unless it is (numerically) inside.
+    fn add(&mut self, x: &[f64]) {
+        let norm0 = dot(x, x).sqrt();
+        if norm0 == 0.0 || !norm0.is_finite() {
+            return;
+        }
+        let mut v = x.to_vec();
+        for _ in 0..2 {
+            for q in &self.q {
+                let c = dot(q, &v);
+                v.iter_mut().zip(q).for_each(|(a, b)| *a -= c * b);
+            }
+        }
+        let norm = dot(&v, &v).sqrt();
+        if norm > 1e-9 * norm0 {
+            v.iter_mut().for_each(|a| *a /= norm);
+            self.q.push(v);
+        }
+    }
+
+    /// `x` minus its projection on the basis.
+    fn residual(&self, x: &[f64]) -> Vec<f64> {
+        let mut v = x.to_vec();
+        for _ in 0..2 {
+            for q in &self.q {
+                let c = dot(q, &v);
+                v.iter_mut().zip(q).for_each(|(a, b)| *a -= c * b);
+            }
+        }
+        v
+    }
+
+    /// ‖x − QQᵀx‖² computed as ‖x‖² − ‖Qᵀx‖², floored at zero.
+    fn orthogonal_norm2(&self, x: &[f64]) -> f64 {
+        let proj: f64 = self.q.iter().map(|q| dot(q, x).powi(2)).sum();
+        (dot(x, x) - proj).max(0.0)
+    }
+}
+
+/// One monomial kept by the screening.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Screened {
+    /// Axis it acts on.
+    pub axis: Axis,
+    /// The monomial, e.g. `u*q*dt`.
+    pub label: String,
+    /// Relative drop of the axis's residual sum of squares on the screening sample.
+    pub drop: f64,
+    /// Bonferroni-corrected P-value of the partial F test on the screening sample.
+    pub p: f64,
+    /// RMS of the monomial on the screening sample (its column is divided by it).
+    pub rms: f64,
+    factors: Vec<Signal>,
+}
+
+/// Screens the pool against the residual of `extended` (the base structure with every
+/// named candidate added) on `data`; returns the survivors, best first per axis.
+pub fn screen(
+    extended: &ModelStructure,
+    data: &SampleChunk,
+    options: &ScreeningOptions,
+) -> Result<Vec<Screened>, ModelError> {
+    let n = data.len();
+    let pool = monomials();
+    let mut ws = Workspace::default();
+    extended.assemble(data, &mut ws)?;
+    let values = evaluate(extended, &pool, data)?;
+    let tests = (pool.len() * Axis::ALL.len()) as f64;
+    let mut out = Vec::new();
+    for axis in Axis::ALL {
+        let mut basis = Basis { q: Vec::new() };
+        for j in extended.axis_columns(axis) {
+            basis.add(ws.column(j));
+        }
+        let mut r = basis.residual(ws.output(axis));
+        for _ in 0..options.per_axis {
+            let sse = dot(&r, &r);
+            let dof = n as f64 - basis.q.len() as f64 - 1.0;
+            if dof < 1.0 || sse <= 0.0 {
+                break;
+            }
+            let best = values
+                .iter()
+                .enumerate()
+                .filter_map(|(j, g)| {
+                    let g2 = basis.orthogonal_norm2(g);
+                    (g2 > 1e-9 * dot(g, g)).then(|| (j, dot(g, &r).powi(2) / g2))
+                })
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            let Some((j, gain)) = best else { break };
+            let f = gain / ((sse - gain).max(f64::MIN_POSITIVE) / dof);
+            let p = (f_survival(f, dof) * tests).min(1.0);
+            let drop = gain / sse;
+            if !(p < options.alpha && drop >= options.min_drop) {
+                break;
+            }
+            let g = &values[j];
+            out.push(Screened {
+                axis,
+                label: label(&pool[j]),
+                drop,
+                p,
+                rms: (dot(g, g) / n as f64).sqrt(),
+                factors: pool[j].iter().map(|&v| VARIABLES[v].0).collect(),
+            });
+            basis.add(g);
+            r = basis.residual(&r);
+        }
+    }
+    Ok(out)
+}
+
+/// P(F(1, dof) > f).
+fn f_survival(f: f64, dof: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+    FisherSnedecor::new(1.0, dof).map_or(1.0, |d| d.sf(f))
+}
+
+impl Screened {
+    /// The survivor as a candidate effect of kind [`EffectKind::Generic`].
+    pub fn candidate(&self) -> Candidate {
+        let name = format!("generic {} {}", self.axis, self.label);
+        Candidate {
+            kind: EffectKind::Generic,
+            name: name.clone(),
+            physics: "Residual structure no named effect explains: a product of states and virtual actuators, estimated as the load at one RMS of the product.",
+            parameters: vec![CandidateParameter {
+                name: format!("g_{}_{}", self.axis, self.label.replace('*', "_")),
+                unit: self.axis.unit().to_string(),
+                columns: vec![Column {
+                    axis: self.axis,
+                    param: 0,
+                    label: format!("{}/{:.4e}", self.label, self.rms),
+                    terms: vec![term(1.0 / self.rms, &self.factors)],
+                }],
+            }],
+        }
+    }
+}
+
+/// Keeps every `stride`-th sample of a stream, at most about `cap`: when the kept set
+/// outgrows `cap` every other kept sample is dropped and the stride doubles, so the
+/// sample stays evenly spread over the whole stream whatever its length.
+#[derive(Debug, Clone)]
+pub struct Thinned {
+    chunk: SampleChunk,
+    cap: usize,
+    stride: u64,
+    seen: u64,
+}
+
+impl Thinned {
+    /// An empty sample holding at most `cap` (≥ 2) samples.
+    pub fn new(cap: usize) -> Self {
+        Self {
+            chunk: SampleChunk::default(),
+            cap: cap.max(2),
+            stride: 1,
+            seen: 0,
+        }
+    }
+
+    /// Offers every sample of `c` in order.
+    pub fn push(&mut self, c: &SampleChunk) {
+        for k in 0..c.len() {
+            if self.seen.is_multiple_of(self.stride) {
+                if self.chunk.is_empty() {
+                    self.chunk = SampleChunk::with_capacity(c.rotor_count(), 0, false);
+                }
+                self.chunk.extend_from(c, k..k + 1);
+                if self.chunk.len() > self.cap {
+                    self.halve();
+                }
+            }
+            self.seen += 1;
+        }
+    }
+
+    fn halve(&mut self) {
+        self.chunk = keep_every(&self.chunk, 2);
+        self.stride *= 2;
+    }
+
+    /// Appends `later` (a later stream) at a common stride, then thins to `cap`.
+    pub fn merge(&mut self, later: &Thinned) {
+        let mut later = later.clone();
+        while later.stride < self.stride {
+            later.halve();
+        }
+        while self.stride < later.stride {
+            self.halve();
+        }
+        if self.chunk.is_empty() {
+            self.chunk = later.chunk;
+        } else {
+            self.chunk.extend_from(&later.chunk, 0..later.chunk.len());
+        }
+        self.seen += later.seen;
+        while self.chunk.len() > self.cap {
+            self.halve();
+        }
+    }
+
+    /// The kept samples.
+    pub fn samples(&self) -> &SampleChunk {
+        &self.chunk
+    }
+}
+
+fn keep_every(c: &SampleChunk, every: usize) -> SampleChunk {
+    let mut out = SampleChunk::with_capacity(c.rotor_count(), 0, false);
+    for k in (0..c.len()).step_by(every) {
+        out.extend_from(c, k..k + 1);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pool_counts_every_monomial_of_degree_three_or_less() {
+        // C(10 + 3, 3) = 286 monomials of degree ≤ 3 in 10 variables.
+        let m = monomials();
+        assert_eq!(m.len(), 286);
+        assert_eq!(pool_size(), 1716);
+        let mut sorted = m.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(sorted.len(), 286, "no monomial twice");
+    }
+
+    fn ramp(n: usize, offset: usize) -> SampleChunk {
+        let mut c = SampleChunk::with_capacity(4, n, false);
+        for k in 0..n {
+            c.t.push((offset + k) as f64);
+            for a in 0..3 {
+                c.velocity[a].push(0.0);
+                c.rates[a].push(0.0);
+                c.wrench[a].push(0.0);
+                c.wrench[a + 3].push(0.0);
+            }
+            for w in &mut c.omega {
+                w.push(0.0);
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn thinning_keeps_an_even_spread_within_the_cap() {
+        let mut t = Thinned::new(100);
+        for c in 0..10 {
+            t.push(&ramp(97, c * 97));
+        }
+        // 970 samples, cap 100: stride 16 keeps 61 samples, at times 0, 16, 32, …
+        let s = t.samples();
+        assert_eq!(s.len(), 61);
+        assert!(s.t.iter().enumerate().all(|(i, &x)| x == (16 * i) as f64));
+        // Merging a second stream at its own stride brings both to the coarser one.
+        let mut u = Thinned::new(100);
+        u.push(&ramp(40, 970));
+        t.merge(&u);
+        assert_eq!(t.samples().len(), 61 + 3);
+        assert_eq!(t.samples().t[61..], [970.0, 986.0, 1002.0]);
+    }
+}
