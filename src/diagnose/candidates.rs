@@ -38,6 +38,8 @@ pub enum EffectKind {
     RollPitchRateDrag,
     /// Unmeasured steady wind: the logged velocity is not the airspeed.
     SteadyWind,
+    /// Moments not tied to the forces by the vehicle file's lever arms.
+    LeverArmMismatch,
     /// Residual structure with no physical name (the generic pool).
     Generic,
 }
@@ -324,6 +326,9 @@ pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
     if ctx.vehicle.props.hub_height != 0.0 {
         out.push(roll_pitch_rate_drag(ctx));
     }
+    if let Some(c) = lever_arm_mismatch(ctx) {
+        out.push(c);
+    }
     out
 }
 
@@ -589,4 +594,50 @@ fn roll_pitch_rate_drag(ctx: &CandidateContext) -> Candidate {
             parameter("C_H_mub_mu0_pq", "-", columns(nu0, &[], "nu0")),
         ],
     }
+}
+
+/// The leading thrust and H-force coefficients: their moment columns carry the rotor
+/// positions (arm length) and the hub height.
+const LEVER_ARM_COEFFICIENTS: [&str; 2] = ["C_T0", "C_H_mub"];
+
+/// Eq. 22 shares each lumped coefficient between the forces and the moments, the
+/// moments' columns carrying the vehicle file's rotor positions and hub height. Wrong
+/// lever arms (or effective thrust and drag centres away from the hubs) break that tie:
+/// the moments need the coefficient times the ratio of true to assumed lever arm. The
+/// candidate gives the leading thrust and H-force coefficients a second value on the
+/// moment axes (the estimate is the moment value minus the force value).
+fn lever_arm_mismatch(ctx: &CandidateContext) -> Option<Candidate> {
+    let s = ctx.structure;
+    let is_moment = |a: Axis| (a as usize) >= 3;
+    let parameters: Vec<CandidateParameter> = (0..s.params.len())
+        .filter(|&p| LEVER_ARM_COEFFICIENTS.contains(&s.params[p].name.as_str()))
+        .filter(|&p| {
+            let axes = || {
+                s.columns
+                    .iter()
+                    .filter(move |c| c.param == p)
+                    .map(|c| c.axis)
+            };
+            axes().any(is_moment) && axes().any(|a| !is_moment(a))
+        })
+        .map(|p| {
+            let cols = s
+                .columns
+                .iter()
+                .filter(|c| c.param == p && is_moment(c.axis))
+                .cloned()
+                .collect();
+            parameter(
+                &format!("{}_moments", s.params[p].name),
+                &s.params[p].unit,
+                cols,
+            )
+        })
+        .collect();
+    (!parameters.is_empty()).then(|| Candidate {
+        kind: EffectKind::LeverArmMismatch,
+        name: "lever-arm mismatch".into(),
+        physics: "Eq. 22 ties the moments to the forces through the vehicle file's rotor positions and hub height; if the true lever arms (or the rotors' effective thrust and drag centres) differ, the moment coefficients differ from the force ones by the ratio of the arms.",
+        parameters,
+    })
 }

@@ -328,6 +328,9 @@ impl Thinned {
 
     /// Appends `later` (a later stream) at a common stride, then thins to `cap`.
     pub fn merge(&mut self, later: &Thinned) {
+        if later.chunk.is_empty() {
+            return;
+        }
         let mut later = later.clone();
         while later.stride < self.stride {
             later.halve();
@@ -409,5 +412,8 @@ mod tests {
         t.merge(&u);
         assert_eq!(t.samples().len(), 61 + 3);
         assert_eq!(t.samples().t[61..], [970.0, 986.0, 1002.0]);
+        // An empty stream (a validation-only log) leaves the sample as it is.
+        t.merge(&Thinned::new(100));
+        assert_eq!((t.samples().len(), t.samples().rotor_count()), (64, 4));
     }
 }

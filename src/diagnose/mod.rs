@@ -40,7 +40,7 @@ pub fn candidate_set(
     let mut params: Vec<Vec<usize>> = candidates.iter().map(|c| c.add_to(&mut extended)).collect();
     let screened = match screening_data {
         Some(data) if !data.is_empty() => generic::screen(
-            &extended,
+            ctx.structure,
             data,
             &generic::ScreeningOptions {
                 alpha: options.alpha,
