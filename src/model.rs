@@ -113,6 +113,13 @@ pub enum Signal {
     /// descent speed (Eq. 18): a bump centred on descent at the hover inflow speed, the
     /// classical vortex-ring region, fading with forward speed.
     VortexRing(u8),
+    /// ∂V_h/∂u = u/V_h, dimensionless (0 at V_h = 0).
+    UOverVh,
+    /// ∂V_h/∂v = v/V_h, dimensionless (0 at V_h = 0).
+    VOverVh,
+    /// Element (k, j) of the NED→body rotation, index 3k + j (body axis k, NED axis j),
+    /// dimensionless; needs the attitude signals.
+    NedToBody(u8),
 }
 
 impl Signal {
@@ -243,6 +250,9 @@ pub enum ModelError {
         "the model needs the CG height above ground (ground-effect term) but the data has no `height`"
     )]
     MissingHeight,
+    /// The model needs the attitude (wind term) and the data has none.
+    #[error("the model needs the attitude (steady-wind term) but the data has no `qw, qx, qy, qz`")]
+    MissingAttitude,
     /// The model needs rotor accelerations (J_z δ̇r term) and the data has none.
     #[error(
         "the model needs rotor accelerations (the J_z * dr_dot term of Eq. 22f) but the data has none; derive them, or neglect the J_z terms"
@@ -489,6 +499,13 @@ impl ModelStructure {
         if self.required.contains(&Signal::GroundEffect) && chunk.height.len() != chunk.len() {
             return Err(ModelError::MissingHeight);
         }
+        let needs_attitude = self
+            .required
+            .iter()
+            .any(|s| matches!(s, Signal::NedToBody(_)));
+        if needs_attitude && chunk.attitude[0].len() != chunk.len() {
+            return Err(ModelError::MissingAttitude);
+        }
         Ok(())
     }
 
@@ -604,6 +621,25 @@ impl ModelStructure {
                         u[k],
                         v[k],
                     );
+                }
+            }
+            UOverVh | VOverVh => {
+                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
+                let along = if s == UOverVh { u } else { v };
+                for (k, d) in dst.iter_mut().enumerate() {
+                    let vh = u[k].hypot(v[k]);
+                    *d = if vh > 0.0 { along[k] / vh } else { 0.0 };
+                }
+            }
+            NedToBody(e) => {
+                let (k, j) = (usize::from(e) / 3, usize::from(e) % 3);
+                let q = &chunk.attitude;
+                for (i, d) in dst.iter_mut().enumerate() {
+                    let quat = [q[0][i], q[1][i], q[2][i], q[3][i]];
+                    let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
+                    // Body→NED matrix R: the NED→body element (k, j) is R[j][k].
+                    let r = crate::io::derive::quat_to_matrix(quat.map(|c| c / norm));
+                    *d = r[j][k];
                 }
             }
             VortexRing(i) => {

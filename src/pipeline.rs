@@ -425,11 +425,11 @@ struct Extended {
 }
 
 impl Extended {
+    /// Candidates for data whose optional signals are those of `first` (a chunk of it).
     fn new(
         req: &FitRequest,
         fit: &Fit,
-        has_height: bool,
-        has_omega_dot: bool,
+        first: &SampleChunk,
         screening: &SampleChunk,
         options: &DiagnoseOptions,
     ) -> Result<Self, PipelineError> {
@@ -437,8 +437,9 @@ impl Extended {
             vehicle: &req.vehicle,
             structure: &req.structure,
             theta: &fit.mmr.theta,
-            has_height,
-            has_omega_dot,
+            has_height: first.height.len() == first.len(),
+            has_omega_dot: first.has_omega_dot(),
+            has_attitude: first.attitude[0].len() == first.len(),
         };
         let set = candidate_set(&ctx, Some(screening), options).map_err(input_error)?;
         Ok(Self {
@@ -482,15 +483,7 @@ fn second_pass(
         let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), PipelineError> {
             let k = usize::from(to_validation);
             if let (Some(options), None) = (&req.diagnose, &extended) {
-                let has_height = part.height.len() == part.len();
-                extended = Some(Extended::new(
-                    req,
-                    &out.fit,
-                    has_height,
-                    part.has_omega_dot(),
-                    screening,
-                    options,
-                )?);
+                extended = Some(Extended::new(req, &out.fit, part, screening, options)?);
             }
             if let Some(ext) = extended.as_mut() {
                 let acc = if to_validation {

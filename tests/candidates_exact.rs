@@ -8,6 +8,7 @@ mod closed_form_common;
 use closed_form_common::{BLADE, vehicle};
 use mrsysid::airframe::{closed_form_wrench, cross};
 use mrsysid::diagnose::{CandidateContext, EffectKind, library};
+use mrsysid::io::derive::quat_to_matrix;
 use mrsysid::model::{ModelOptions, ModelStructure};
 use mrsysid::sample::Sample;
 use mrsysid::vehicle::{Preset, Vehicle};
@@ -35,6 +36,11 @@ fn samples(n_rotors: usize, n: usize) -> Vec<Sample> {
                 .map(|_| rng.random_range(-3000.0..3000.0))
                 .collect(),
             height: Some(rng.random_range(0.0..0.5)),
+            attitude: Some({
+                let q: [f64; 4] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+                let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+                q.map(|c| c / n)
+            }),
             ..Sample::default()
         })
         .collect()
@@ -97,6 +103,7 @@ fn check(
         theta: &theta,
         has_height: true,
         has_omega_dot: true,
+        has_attitude: true,
     };
     let cand = library(&ctx)
         .into_iter()
@@ -191,4 +198,21 @@ fn delay_columns_are_first_order_exact() {
         closed_form_wrench(&v, &BLADE, s.velocity, s.rates, &late, &s.omega_dot)
     });
     assert!(e < 5e-3, "{e:e}");
+}
+
+#[test]
+fn steady_wind_columns_are_first_order_exact() {
+    // The rotors feel the airspeed v − C W, C the NED→body rotation (Rᵀ); the
+    // candidate is the first-order term −(∂F/∂v) C W. Its error relative to the effect
+    // is O(|W|/|v|) (second-order term over first); with |W| ≈ 0.06 m/s and airspeeds of
+    // metres per second, 2e-2 bounds it, while a wrong axis or sign would show as O(1).
+    let v = vehicle(Preset::QuadX);
+    let wind = [0.05, -0.03, 0.02];
+    let e = check(&v, EffectKind::SteadyWind, &wind, |s, _| {
+        let r = quat_to_matrix(s.attitude.unwrap());
+        let air: [f64; 3] =
+            std::array::from_fn(|k| s.velocity[k] - (0..3).map(|j| r[j][k] * wind[j]).sum::<f64>());
+        closed_form_wrench(&v, &BLADE, air, s.rates, &s.omega, &s.omega_dot)
+    });
+    assert!(e < 2e-2, "{e:e}");
 }

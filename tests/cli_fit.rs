@@ -509,6 +509,27 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
 }
 
 #[test]
+fn diagnosis_on_a_flight_finds_an_unmeasured_steady_wind() {
+    // A 30 s flight in a steady 3 m/s north, 2 m/s west wind whose log holds the
+    // ground-relative velocity. The candidate is first order in the wind and built
+    // from base estimates the wind has biased: measured 3.13, −2.48, 0.21 m/s, so each
+    // component must come within 0.6 m/s (a sixth of the 3.6 m/s wind).
+    let v = simulate_and_fit("wind", &["--effect", "wind=3,-2,0", "--seed", "9"]);
+    let d = &v["diagnosis"];
+    let first = first_effect(d);
+    assert_eq!(first["name"], "steady wind");
+    for (name, truth) in [("wind_north", 3.0), ("wind_east", -2.0), ("wind_down", 0.0)] {
+        let w = effect_parameter(first, name);
+        assert!((w - truth).abs() < 0.6, "{name} {w}");
+    }
+    let (b, a) = (
+        axis_metric(d, "before", "Fx", "nrmse"),
+        axis_metric(d, "after", "Fx", "nrmse"),
+    );
+    assert!(a < 0.7 * b, "Fx validation NRMSE {b} -> {a}");
+}
+
+#[test]
 fn diagnosis_on_a_flight_finds_a_rotor_speed_delay_within_one_sample() {
     // A 30 s flight whose logged rotor speeds lag the true ones by 20 ms (2 log samples
     // at 100 Hz); the delay must come out within one sample (10 ms).

@@ -117,6 +117,8 @@ pub struct CandidateContext<'a> {
     pub has_height: bool,
     /// The data has rotor accelerations (delay candidate).
     pub has_omega_dot: bool,
+    /// The data has the attitude (steady-wind candidate).
+    pub has_attitude: bool,
 }
 
 impl CandidateContext<'_> {
@@ -229,6 +231,37 @@ impl CandidateContext<'_> {
             .collect()
     }
 
+    /// ∂(model load of `axis`)/∂(body velocity component `k`: u, v, w) from the base
+    /// estimates, as terms (u, v, w and V_h factors differentiated; ∂V_h/∂u = u/V_h).
+    fn model_velocity_gradient(&self, axis: Axis, k: usize) -> Vec<Term> {
+        use Signal::*;
+        let velocity = [U, V, W][k];
+        let vh_slope = [Some(UOverVh), Some(VOverVh), None][k];
+        self.model_force(axis, 1.0)
+            .iter()
+            .flat_map(|t| {
+                (0..t.factors.len()).filter_map(move |i| {
+                    let slope = match t.factors[i] {
+                        f if f == velocity => None,
+                        Vh => Some(vh_slope?),
+                        _ => return None,
+                    };
+                    let mut factors = t.factors.clone();
+                    match slope {
+                        Some(s) => factors[i] = s,
+                        None => {
+                            factors.remove(i);
+                        }
+                    }
+                    Some(Term {
+                        coef: t.coef,
+                        factors,
+                    })
+                })
+            })
+            .collect()
+    }
+
     /// Model force of axis `axis` from the base estimates, as terms times `scale`.
     fn model_force(&self, axis: Axis, scale: f64) -> Vec<Term> {
         self.structure
@@ -321,6 +354,9 @@ pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
     }
     if ctx.has_omega_dot {
         out.push(delay(ctx));
+    }
+    if ctx.has_attitude {
+        out.push(steady_wind(ctx));
     }
     out.push(yaw_rate_drag(ctx));
     if ctx.vehicle.props.hub_height != 0.0 {
@@ -424,6 +460,45 @@ fn quadratic_drag(ctx: &CandidateContext) -> Candidate {
             axis(Axis::Fy, V, AbsV, "drag_area_y"),
             axis(Axis::Fz, W, AbsW, "drag_area_z"),
         ],
+    }
+}
+
+/// Unmeasured steady wind W (NED): the model sees the logged velocity v where the rotors
+/// feel v − C W (C the NED→body rotation), so to first order the loads change by
+/// −(∂F/∂v) C W. ∂F/∂v is the base model's velocity gradient with the base estimates
+/// (terms in u, v, w, V_h; ∂V_h/∂u = u/V_h).
+fn steady_wind(ctx: &CandidateContext) -> Candidate {
+    let parameters = ["wind_north", "wind_east", "wind_down"]
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            let columns = Axis::ALL
+                .iter()
+                .map(|&axis| {
+                    let terms = (0..3)
+                        .flat_map(|k| {
+                            let c = Signal::NedToBody((3 * k + j) as u8);
+                            ctx.model_velocity_gradient(axis, k)
+                                .into_iter()
+                                .map(move |mut t| {
+                                    t.coef = -t.coef;
+                                    t.factors.push(c);
+                                    t
+                                })
+                        })
+                        .collect();
+                    column(axis, &format!("-dF/dv*C[:,{j}]"), terms)
+                })
+                .filter(|c| !c.terms.is_empty())
+                .collect();
+            parameter(name, "m/s", columns)
+        })
+        .collect();
+    Candidate {
+        kind: EffectKind::SteadyWind,
+        name: "steady wind".into(),
+        physics: "A steady wind makes the airspeed differ from the logged (ground-relative) velocity by the wind rotated into body axes, which changes the rotor loads through their velocity dependence.",
+        parameters,
     }
 }
 

@@ -166,6 +166,7 @@ fn plausible(name: &str, value: f64) -> bool {
         "vortex_ring_thrust_loss" => range(0.0, 0.6),
         n if n.starts_with("drag_area_") => range(0.0, 2.0),
         "rotor_speed_delay" => range(-0.05, 0.2),
+        "wind_north" | "wind_east" | "wind_down" => range(-30.0, 30.0),
         _ => value.is_finite(),
     }
 }
@@ -446,6 +447,7 @@ pub fn diagnose_chunks(
         theta: &fit.mmr.theta,
         has_height: first.is_some_and(|c| c.height.len() == c.len() && !c.is_empty()),
         has_omega_dot: first.is_some_and(|c| c.has_omega_dot()),
+        has_attitude: first.is_some_and(|c| c.attitude[0].len() == c.len() && !c.is_empty()),
     };
     let mut thinned = super::Thinned::new(super::SCREENING_SAMPLES);
     fit_data.iter().for_each(|c| thinned.push(c));
