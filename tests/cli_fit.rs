@@ -530,6 +530,29 @@ fn diagnosis_on_a_flight_finds_an_unmeasured_steady_wind() {
 }
 
 #[test]
+fn clean_flights_get_no_undeclared_effect() {
+    // Ten 30 s flights without any declared effect, loads logged with noise: no named
+    // effect may be added except the descent nonlinearity. The truth's momentum-theory
+    // inflow (src/sim/inflow.rs) changes thrust strongly in descent near ν0, which
+    // every one of these flights visits (48–102 samples descending at 0.5–1.5 ν0 with
+    // V_h < ν0), and which Eq. 22's linearised inflow lacks; the vortex-ring candidate
+    // is that nonlinearity (on 2 of the 10 seeds it pays on validation). Model
+    // completions and generic-pool terms may be added: the simulator's inflow and hub
+    // kinematics hold physics Eq. 22 lacks, and naming it as such is right.
+    for seed in 40..50 {
+        let v = simulate_and_fit(&format!("clean_{seed}"), &["--seed", &seed.to_string()]);
+        let added = v["diagnosis"]["effects_added"].as_array().unwrap();
+        let effects: Vec<&str> = added
+            .iter()
+            .filter(|e| e["model_completion"] == false && e["generic"] == false)
+            .map(|e| e["name"].as_str().unwrap())
+            .filter(|&n| n != "vortex-ring state")
+            .collect();
+        assert!(effects.is_empty(), "seed {seed}: {effects:?}");
+    }
+}
+
+#[test]
 fn diagnosis_on_a_flight_finds_a_rotor_speed_delay_within_one_sample() {
     // A 30 s flight whose logged rotor speeds lag the true ones by 20 ms (2 log samples
     // at 100 Hz); the delay must come out within one sample (10 ms).

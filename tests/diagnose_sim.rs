@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use mrsysid::diagnose::{DiagnoseOptions, Diagnosis, diagnose_chunks};
+use mrsysid::diagnose::{DiagnoseOptions, Diagnosis, EffectKind, diagnose_chunks};
 use mrsysid::estimate::FitOptions;
 use mrsysid::model::{ModelOptions, ModelStructure};
 use mrsysid::sample::SampleChunk;
@@ -158,7 +158,7 @@ fn clean_sweeps_get_no_undeclared_effect() {
         let effects: Vec<&str> = d
             .effects_added
             .iter()
-            .filter(|e| e.kind.priority() == 1)
+            .filter(|e| e.kind != EffectKind::Generic && !e.kind.is_model_completion())
             .map(|e| e.name.as_str())
             .collect();
         assert!(effects.is_empty(), "seed {seed}: {effects:?}");

@@ -40,6 +40,8 @@ pub enum EffectKind {
     SteadyWind,
     /// Moments not tied to the forces by the vehicle file's lever arms.
     LeverArmMismatch,
+    /// Constant accelerometer bias in forces derived as m a.
+    AccelerometerBias,
     /// Residual structure with no physical name (the generic pool).
     Generic,
 }
@@ -52,18 +54,6 @@ impl EffectKind {
             self,
             Self::YawRateDrag | Self::RollPitchRateDrag | Self::LinearVh | Self::CgHeight
         )
-    }
-
-    /// Order in which accepted candidates are preferred: completions of Eq. 22 (2), then
-    /// named physical effects (1), then the generic pool (0).
-    pub fn priority(self) -> u8 {
-        if self.is_model_completion() {
-            2
-        } else if self == Self::Generic {
-            0
-        } else {
-            1
-        }
     }
 }
 
@@ -365,7 +355,28 @@ pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
     if let Some(c) = lever_arm_mismatch(ctx) {
         out.push(c);
     }
+    out.push(accelerometer_bias(ctx));
     out
+}
+
+/// Forces derived as F = m a from an accelerometer with a constant bias b carry m b.
+/// Only the in-plane components: a constant on F_z cannot be told from the thrust
+/// terms (δt² and ν0 δt are nearly constant near hover), while Eq. 22's in-plane forces
+/// have no constant term.
+fn accelerometer_bias(ctx: &CandidateContext) -> Candidate {
+    let m = ctx.vehicle.props.mass;
+    let axis = |axis: Axis, name: &str| {
+        parameter(name, "m/s^2", vec![column(axis, "m", vec![term(m, &[])])])
+    };
+    Candidate {
+        kind: EffectKind::AccelerometerBias,
+        name: "accelerometer bias".into(),
+        physics: "Forces derived as m a from an accelerometer with a constant bias b (or logged with a constant offset) carry m b on every sample.",
+        parameters: vec![
+            axis(Axis::Fx, "accel_bias_x"),
+            axis(Axis::Fy, "accel_bias_y"),
+        ],
+    }
 }
 
 fn weak_rotor(ctx: &CandidateContext, i: usize) -> Candidate {

@@ -10,17 +10,22 @@
 //! 1. its MMR estimates are significant: the smallest P-value of its parameters is below
 //!    α / (number of named candidates scored in the step) (Bonferroni);
 //! 2. it is plausible: every estimate lies in the physical range of its parameter;
-//! 3. it pays on validation data: on some axis it acts on, validation NRMSE falls by at
-//!    least [`DiagnoseOptions::min_gain`] (relative), and no axis gets worse by more
-//!    than [`DiagnoseOptions::max_loss`].
+//! 3. it pays on validation data: on some axis validation NRMSE falls by at least
+//!    [`DiagnoseOptions::min_gain`] (relative), so does the sum over all axes, and no
+//!    axis gets worse by more than [`DiagnoseOptions::max_loss`]. All axes count: the
+//!    MMR couples them through shared parameters, so a candidate can pay on an axis it
+//!    has no column on.
 //!
 //! Among accepted candidates, completions of the Eq. 22 structure (terms its own
 //! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
-//! named effects, and those before terms of the generic pool ([`super::generic`]:
-//! residual structure with no name, whose Bonferroni divisor is the whole pool it was
-//! screened from); within each group the largest total validation gain wins. Candidates
-//! of other kinds in the same group whose gain is within [`DiagnoseOptions::look_alike`]
-//! of the winner's are reported as look-alikes the data cannot tell apart.
+//! effects; within each group the largest validation gain summed over the axes wins.
+//! Terms of the
+//! generic pool ([`super::generic`]: residual structure with no name, whose Bonferroni
+//! divisor is the whole pool it was screened from) compete with named effects, but a
+//! named effect's gain counts 1 + [`DiagnoseOptions::look_alike`] times: named effects
+//! are preferred when they explain about as much. Candidates of other kinds in the same
+//! group whose gain is within [`DiagnoseOptions::look_alike`] of the winner's are
+//! reported as look-alikes the data cannot tell apart.
 
 use serde::Serialize;
 
@@ -90,7 +95,7 @@ pub struct CandidateScore {
     pub parameters: Vec<EffectParameter>,
     /// Relative validation-NRMSE reduction per axis (positive = better), Fx…Mz.
     pub validation_gain: [f64; 6],
-    /// Sum of the positive gains on the axes it acts on.
+    /// Sum of the gains over all six axes (losses count negative).
     pub total_gain: f64,
     /// Smallest P-value of its parameters.
     pub min_p: f64,
@@ -167,6 +172,8 @@ fn plausible(name: &str, value: f64) -> bool {
         n if n.starts_with("drag_area_") => range(0.0, 2.0),
         "rotor_speed_delay" => range(-0.05, 0.2),
         "wind_north" | "wind_east" | "wind_down" => range(-30.0, 30.0),
+        // Consumer MEMS accelerometers stay within ~1 m/s² of zero bias.
+        n if n.starts_with("accel_bias_") => range(-2.0, 2.0),
         _ => value.is_finite(),
     }
 }
@@ -261,14 +268,15 @@ pub fn diagnose(
         // undeclared effects (so an effect is judged against a model that already has
         // the terms its own assumptions drop), and named effects before generic terms;
         // then by validation gain.
+        let look_alike = options.look_alike;
         scored.sort_by(|a, b| {
             let key = |s: &CandidateScore| {
                 let ok = s.rejected.is_empty();
-                (ok, if ok { s.kind.priority() } else { 0 })
+                (ok, ok && s.kind.is_model_completion())
             };
             key(&a.0)
                 .cmp(&key(&b.0))
-                .then(a.0.total_gain.total_cmp(&b.0.total_gain))
+                .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
                 .reverse()
         });
         let best_ok = scored
@@ -283,7 +291,7 @@ pub fn diagnose(
                     .filter(|s| {
                         s.0.rejected.is_empty()
                             && s.0.kind != best.kind
-                            && s.0.kind.priority() == best.kind.priority()
+                            && s.0.kind.is_model_completion() == best.kind.is_model_completion()
                             && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
                     })
                     .map(|s| s.0.name.clone())
@@ -328,6 +336,16 @@ pub fn diagnose(
         std: current.std,
         structure: current.structure,
     })
+}
+
+/// Validation gain used to rank accepted candidates of one group: a named effect's gain
+/// counts `1 + look_alike` times, so it is preferred over a generic term that explains
+/// about as much, but not over one that explains clearly more.
+fn preference(s: &CandidateScore, look_alike: f64) -> f64 {
+    match s.kind {
+        EffectKind::Generic => s.total_gain,
+        _ => s.total_gain * (1.0 + look_alike),
+    }
 }
 
 /// Scores candidate `c` added to the model with candidates `added`.
@@ -385,15 +403,15 @@ fn score(
         .collect();
     s.min_p = s.parameters.iter().map(|p| p.p).fold(1.0, f64::min);
     s.validation_gain = gains(&current.validation, &t.validation);
-    s.total_gain = axes
-        .iter()
-        .map(|&a| s.validation_gain[a as usize].max(0.0))
-        .sum();
+    // The MMR couples the axes through shared parameters, so a candidate can pay on an
+    // axis it has no column on (freeing a moment coefficient lets F_z fit itself):
+    // gains count on every axis, losses too.
+    s.total_gain = s.validation_gain.iter().sum();
     let worst = s.validation_gain.iter().fold(0.0_f64, |m, &g| m.min(g));
-    let best_axis = axes
+    let best_axis = s
+        .validation_gain
         .iter()
-        .map(|&a| s.validation_gain[a as usize])
-        .fold(f64::NEG_INFINITY, f64::max);
+        .fold(f64::NEG_INFINITY, |m, &g| m.max(g));
     s.rejected = if s.min_p >= level {
         format!("not significant (P = {:.2e} >= {level:.2e})", s.min_p)
     } else if let Some(p) = s
@@ -408,10 +426,10 @@ fn score(
             100.0 * best_axis,
             100.0 * options.min_gain
         )
-    } else if s.validation_gain.iter().sum::<f64>() < options.min_gain {
+    } else if s.total_gain < options.min_gain {
         format!(
             "net validation gain over all axes {:.1} % below {:.1} %",
-            100.0 * s.validation_gain.iter().sum::<f64>(),
+            100.0 * s.total_gain,
             100.0 * options.min_gain
         )
     } else if worst < -options.max_loss {

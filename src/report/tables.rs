@@ -49,11 +49,9 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
             "candidate", "val gain", "min P"
         );
         for c in step.ranking.iter().take(8) {
-            let best = c
-                .validation_gain
-                .iter()
-                .copied()
-                .fold(f64::NEG_INFINITY, f64::max);
+            // The ranking's measure: relative validation-NRMSE reductions summed over
+            // all axes.
+            let gain: f64 = c.validation_gain.iter().sum();
             let verdict = if c.rejected.is_empty() {
                 "accepted"
             } else {
@@ -63,7 +61,7 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
                 out,
                 "    {:<26} {:>8.1}% {:>10.2e}  {verdict}",
                 c.name,
-                100.0 * best,
+                100.0 * gain,
                 c.min_p
             );
         }
