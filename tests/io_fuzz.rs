@@ -4,7 +4,8 @@
 //! duplication, truncation); every case must return Ok or an error — never panic.
 //!
 //! CI runs a few thousand cases (well under 20 s); set `MRSYSID_FUZZ_CASES` to run
-//! more locally, e.g. `MRSYSID_FUZZ_CASES=200000 cargo test --test io_fuzz --release`.
+//! more locally, and `MRSYSID_FUZZ_SEED` to draw other cases than CI's, e.g.
+//! `MRSYSID_FUZZ_CASES=200000 MRSYSID_FUZZ_SEED=7 cargo test --test io_fuzz --release`.
 
 mod io_support;
 
@@ -20,6 +21,15 @@ use mrsysid::io::{InvalidSamples, Mapping, ReadOptions, open_log};
 use mrsysid::vehicle::{Vehicle, VehicleSource};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
+
+/// Random source of target `target`: its own stream, shifted by `MRSYSID_FUZZ_SEED`.
+fn rng(target: u64) -> StdRng {
+    let shift: u64 = std::env::var("MRSYSID_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    StdRng::seed_from_u64(target.wrapping_add(shift.wrapping_mul(1000)))
+}
 
 /// Cases per target: `MRSYSID_FUZZ_CASES` or the CI default.
 fn cases(ci_default: usize) -> usize {
@@ -112,7 +122,7 @@ fn fuzz_csv_reader() {
     let base_path = tmp("base.csv");
     write_contract_csv(&base_path, [&src]).unwrap();
     let base = std::fs::read(&base_path).unwrap();
-    let mut rng = StdRng::seed_from_u64(1);
+    let mut rng = rng(1);
     let path = tmp("case.csv");
     let drop = ReadOptions {
         invalid: InvalidSamples::DropAndCount,
@@ -142,7 +152,7 @@ fn fuzz_mapping_and_vehicle_toml() {
         .collect();
     let log_path = tmp("neurobem-head.csv");
     std::fs::write(&log_path, head).unwrap();
-    let mut rng = StdRng::seed_from_u64(2);
+    let mut rng = rng(2);
     for case in 0..cases(3000) {
         let input = mutate(&mut rng, &mapping_text);
         no_panic("mapping", case, &input, || {
@@ -162,7 +172,7 @@ fn fuzz_mcap_reader_json_and_cdr() {
     let vehicle = quad(3e-5);
     let src = analytic_chunk(30, 100.0);
     let mapping = written_mapping(4, true, true, true);
-    let mut rng = StdRng::seed_from_u64(3);
+    let mut rng = rng(3);
     for encoding in [Encoding::Json, Encoding::Cdr] {
         let base_path = tmp(&format!("base-{encoding:?}.mcap"));
         write_samples(&base_path, &vehicle, [&src], encoding).unwrap();
@@ -199,7 +209,7 @@ fn fuzz_cdr_decoder_and_schema_parser() {
         "{:?}",
         decode(&schema, &base)
     );
-    let mut rng = StdRng::seed_from_u64(4);
+    let mut rng = rng(4);
     for case in 0..cases(20000) {
         let input = mutate(&mut rng, &base);
         no_panic("cdr", case, &input, || {
