@@ -359,18 +359,23 @@ fn bad_input_exits_2_with_a_message_naming_the_file_and_no_output() {
     assert_eq!(mrsysid(&["fit"]).status.code(), Some(2));
 }
 
-#[test]
-fn real_neurobem_excerpt_fits_through_the_mapping() {
-    // Real data: the forces are explained (validation R² ≥ 0.8 on Fx, Fy; measured
-    // 0.90, 0.97) while the moments are not (R² ≤ 0.5: Eq. 22 with one shared C_T0 and
-    // the assumed arm length cannot reconcile thrust and moments on this vehicle). The
-    // bounds pin today's behaviour so a regression or an improvement is noticed.
-    let report = tmp("neurobem.json");
-    let out = mrsysid(&[
-        "fit",
-        "data/neurobem/figure8_1_20210218170320seg2_100hz.csv",
-        "data/neurobem/melon_1_20210223114138seg3_100hz.csv",
-        "data/neurobem/racetrack_1_20210218171908seg2_100hz.csv",
+/// Fits the shipped NeuroBEM excerpts `logs` (paths after `data/neurobem/`, with any
+/// `--validate` in between) through the shipped vehicle and mapping; the JSON report.
+fn fit_neurobem(name: &str, logs: &[&str]) -> serde_json::Value {
+    let report = tmp(&format!("{name}.json"));
+    let paths: Vec<String> = logs
+        .iter()
+        .map(|l| {
+            if l.starts_with("--") {
+                l.to_string()
+            } else {
+                format!("data/neurobem/{l}")
+            }
+        })
+        .collect();
+    let mut args = vec!["fit"];
+    args.extend(paths.iter().map(String::as_str));
+    args.extend([
         "--vehicle",
         "data/vehicles/neurobem.toml",
         "--mapping",
@@ -379,12 +384,29 @@ fn real_neurobem_excerpt_fits_through_the_mapping() {
         report.to_str().unwrap(),
         "--quiet",
     ]);
+    let out = mrsysid(&args);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let v = json(&report);
+    json(&report)
+}
+
+#[test]
+fn real_neurobem_excerpt_fits_through_the_mapping() {
+    // Real data: the forces are explained (validation R² ≥ 0.8 on Fx, Fy; measured
+    // 0.90, 0.97) while the moments are not (R² ≤ 0.5: Eq. 22 with one shared C_T0 and
+    // the assumed arm length cannot reconcile thrust and moments on this vehicle). The
+    // bounds pin today's behaviour so a regression or an improvement is noticed.
+    let v = fit_neurobem(
+        "neurobem",
+        &[
+            "figure8_1_20210218170320seg2_100hz.csv",
+            "melon_1_20210223114138seg3_100hz.csv",
+            "racetrack_1_20210218171908seg2_100hz.csv",
+        ],
+    );
     assert_eq!(
         v["samples"].as_u64().unwrap() + v["validation_samples"].as_u64().unwrap(),
         3000
@@ -408,27 +430,15 @@ fn real_neurobem_two_logs_validated_on_a_third_find_the_lever_arm_mismatch() {
     // copy of C_T0 (measured −0.0255 ± 0.0017, > 10 σ below zero), and Fz, no longer
     // pulled by the moments through the shared C_T0, goes from R² −0.38 to 0.53 on the
     // race-track excerpt (bounds: ≥ 5 σ, and Fz R² at least 0.3 better and ≥ 0.4).
-    let report = tmp("neurobem_rotation.json");
-    let out = mrsysid(&[
-        "fit",
-        "data/neurobem/figure8_1_20210218170320seg2_100hz.csv",
-        "data/neurobem/melon_1_20210223114138seg3_100hz.csv",
-        "--validate",
-        "data/neurobem/racetrack_1_20210218171908seg2_100hz.csv",
-        "--vehicle",
-        "data/vehicles/neurobem.toml",
-        "--mapping",
-        "examples/neurobem.toml",
-        "--json",
-        report.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let v = fit_neurobem(
+        "neurobem_rotation",
+        &[
+            "figure8_1_20210218170320seg2_100hz.csv",
+            "melon_1_20210223114138seg3_100hz.csv",
+            "--validate",
+            "racetrack_1_20210218171908seg2_100hz.csv",
+        ],
     );
-    let v = json(&report);
     let d = &v["diagnosis"];
     let lever = d["effects_added"]
         .as_array()
