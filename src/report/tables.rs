@@ -115,8 +115,8 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
     out
 }
 
-/// `estimate ± std unit`, in mm for lengths, ms for times and % for fractional changes
-/// (`*_scale`, `*_loss` parameters).
+/// `estimate ± std unit`, in mm for lengths, ms for times, % for fractional changes
+/// (`*_scale`, `*_loss` parameters) and fixed decimals for speeds and accelerations.
 fn with_unit(name: &str, x: f64, s: f64, unit: &str) -> String {
     let fraction = name.contains("scale") || name.contains("loss");
     match unit {
@@ -124,6 +124,8 @@ fn with_unit(name: &str, x: f64, s: f64, unit: &str) -> String {
         "m" => format!("{:.2} ± {:.2} mm", 1e3 * x, 1e3 * s),
         "-" => format!("{x:.4e} ± {s:.1e}"),
         "s" => format!("{:.2} ± {:.2} ms", 1e3 * x, 1e3 * s),
+        "m/s" => format!("{x:.2} ± {s:.2} m/s"),
+        "m/s^2" => format!("{x:.3} ± {s:.3} m/s^2"),
         u => format!("{x:.4e} ± {s:.1e} {u}"),
     }
 }
