@@ -153,7 +153,32 @@ struct LogStats {
     /// Thinned fit samples for the generic-pool screening.
     screening: Thinned,
     summary: Summary,
+    /// Optional signals of the log's first chunk, `None` for a log without samples.
+    signals: Option<OptionalSignals>,
 }
+
+/// Which optional signals a log carries (they decide the candidate effects).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct OptionalSignals {
+    height: bool,
+    omega_dot: bool,
+    attitude: bool,
+}
+
+impl OptionalSignals {
+    fn of(chunk: &SampleChunk) -> Self {
+        Self {
+            height: chunk.height.len() == chunk.len(),
+            omega_dot: chunk.has_omega_dot(),
+            attitude: chunk.attitude[0].len() == chunk.len(),
+        }
+    }
+}
+
+/// What the second pass needs to know of a log from the first: the samples routed to
+/// fit and to validation (for plot decimation), in job order.
+#[derive(Debug, Clone, Copy)]
+struct LogCounts([u64; 2]);
 
 fn input_error(e: impl std::fmt::Display) -> PipelineError {
     PipelineError::Input(e.to_string())
@@ -164,38 +189,96 @@ fn open(path: &Path, req: &FitRequest) -> Result<LogReader, PipelineError> {
 }
 
 /// Reads one log, routing each sample to the fit or validation statistics.
-fn read_log(path: &Path, role: Role, req: &FitRequest) -> Result<LogStats, PipelineError> {
-    let mut reader = open(path, req)?;
-    let mut stats = LogStats {
-        fit: Accumulator::new(&req.structure),
-        validation: Accumulator::new(&req.structure),
-        screening: Thinned::new(SCREENING_SAMPLES),
-        summary: Summary::default(),
-    };
+fn read_log(
+    path: &Path,
+    role: Role,
+    req: &FitRequest,
+    overlap: bool,
+) -> Result<LogStats, PipelineError> {
+    let mut fit = Accumulator::new(&req.structure);
+    let mut validation = Accumulator::new(&req.structure);
+    let mut signals = None;
+    let mut screening = Thinned::new(SCREENING_SAMPLES);
+    let keep_screening = req.diagnose.is_some();
     let mut ws = Workspace::default();
     let mut split = Splitter::new(role);
-    let (fit, validation) = (&mut stats.fit, &mut stats.validation);
-    let screening = &mut stats.screening;
-    let keep_screening = req.diagnose.is_some();
     let mut sink = |part: &SampleChunk, to_validation: bool| {
         let acc = if to_validation {
-            &mut *validation
+            &mut validation
         } else {
             if keep_screening {
                 screening.push(part);
             }
-            &mut *fit
+            &mut fit
         };
         acc.push(&req.structure, part, &mut ws).map_err(input_error)
     };
-    for chunk in coalesce(reader.by_ref()) {
+    let summary = stream_log(path, req, overlap, |chunk| {
+        signals.get_or_insert_with(|| OptionalSignals::of(chunk));
+        split.route(chunk, &mut sink)
+    })?;
+    split.finish(&mut sink)?;
+    Ok(LogStats {
+        fit,
+        validation,
+        screening,
+        summary,
+        signals,
+    })
+}
+
+/// Chunks in flight between a log's reader thread and its consumer.
+const CHUNKS_IN_FLIGHT: usize = 4;
+
+/// Feeds the coalesced chunks of the log at `path` to `consume` in order and returns the
+/// reader's summary. With `overlap`, reading and parsing run on a thread of their own
+/// that hands chunks over a bounded channel, so parsing overlaps the consumer's work
+/// (memory stays at [`CHUNKS_IN_FLIGHT`] chunks).
+fn stream_log(
+    path: &Path,
+    req: &FitRequest,
+    overlap: bool,
+    mut consume: impl FnMut(&SampleChunk) -> Result<(), PipelineError>,
+) -> Result<Summary, PipelineError> {
+    let mut feed = |chunk: Result<SampleChunk, io::IoError>| {
         let chunk = chunk.map_err(input_error)?;
         count_progress(req, &chunk);
-        split.route(&chunk, &mut sink)?;
+        consume(&chunk)
+    };
+    if !overlap {
+        let mut reader = open(path, req)?;
+        for chunk in coalesce(reader.by_ref()) {
+            feed(chunk)?;
+        }
+        return Ok(reader.summary().clone());
     }
-    split.finish(&mut sink)?;
-    stats.summary = reader.summary().clone();
-    Ok(stats)
+    let (tx, rx) = std::sync::mpsc::sync_channel(CHUNKS_IN_FLIGHT);
+    std::thread::scope(|scope| {
+        // The reader is opened on its own thread (it is not `Send`).
+        let producer = scope.spawn(move || -> Result<Summary, PipelineError> {
+            let mut reader = open(path, req)?;
+            for chunk in coalesce(reader.by_ref()) {
+                let failed = chunk.is_err();
+                // A closed channel means the consumer stopped on an error of its own.
+                if tx.send(chunk).is_err() || failed {
+                    break;
+                }
+            }
+            Ok(reader.summary().clone())
+        });
+        let mut consumed = Ok(());
+        while let Ok(chunk) = rx.recv() {
+            consumed = feed(chunk);
+            if consumed.is_err() {
+                break;
+            }
+        }
+        drop(rx);
+        let summary = producer
+            .join()
+            .unwrap_or_else(|_| Err(PipelineError::Fit("a reader thread stopped".into())));
+        consumed.and(summary)
+    })
 }
 
 /// Concatenates consecutive chunks of one log (across segment boundaries) into chunks of
@@ -315,13 +398,21 @@ impl Splitter {
     }
 }
 
-/// Reads `jobs` on up to `threads` threads; results come back in job order, so merged
-/// statistics do not depend on scheduling.
-fn read_all(jobs: &[(PathBuf, Role)], req: &FitRequest) -> Result<Vec<LogStats>, PipelineError> {
+/// Runs `per_log(job index, path, role, overlap)` for every job on up to `req.threads`
+/// threads; results come back in job order, so merged statistics do not depend on
+/// scheduling. `overlap` tells a job it may spend a second thread on reading (when there
+/// are at least twice as many threads as logs being worked on).
+fn run_jobs<T: Send>(
+    jobs: &[(PathBuf, Role)],
+    req: &FitRequest,
+    per_log: impl Fn(usize, &Path, Role, bool) -> Result<T, PipelineError> + Sync,
+) -> Result<Vec<T>, PipelineError> {
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<LogStats, PipelineError>>>> =
+    let results: Mutex<Vec<Option<Result<T, PipelineError>>>> =
         Mutex::new((0..jobs.len()).map(|_| None).collect());
-    let workers = req.threads.clamp(1, jobs.len().max(1));
+    let threads = req.threads.max(1);
+    let workers = threads.min(jobs.len().max(1));
+    let overlap = threads >= 2 * workers;
     std::thread::scope(|scope| {
         for _ in 0..workers {
             scope.spawn(|| {
@@ -330,7 +421,7 @@ fn read_all(jobs: &[(PathBuf, Role)], req: &FitRequest) -> Result<Vec<LogStats>,
                     let Some((path, role)) = jobs.get(i) else {
                         break;
                     };
-                    let r = read_log(path, *role, req);
+                    let r = per_log(i, path, *role, overlap);
                     results.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(r);
                 }
             });
@@ -363,15 +454,20 @@ fn jobs(req: &FitRequest) -> Vec<(PathBuf, Role)> {
 /// Runs the pipeline.
 pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
     let jobs = jobs(req);
-    let per_log = read_all(&jobs, req)?;
+    let per_log = run_jobs(&jobs, req, |_, path, role, overlap| {
+        read_log(path, role, req, overlap)
+    })?;
     let mut fit_stats = Accumulator::new(&req.structure);
     let mut validation_stats = Accumulator::new(&req.structure);
     let mut screening = Thinned::new(SCREENING_SAMPLES);
     let mut summaries = Vec::new();
+    let mut counts = Vec::new();
+    let signals = per_log.iter().find_map(|s| s.signals);
     for s in per_log {
         fit_stats.merge(&s.fit).map_err(input_error)?;
         validation_stats.merge(&s.validation).map_err(input_error)?;
         screening.merge(&s.screening);
+        counts.push(LogCounts([s.fit.count(), s.validation.count()]));
         summaries.push(s.summary);
     }
     if fit_stats.count() == 0 {
@@ -407,7 +503,14 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
         diagnosis: None,
     };
     if req.second_pass || req.diagnose.is_some() {
-        second_pass(req, &jobs, screening.samples(), &mut outcome)?;
+        second_pass(
+            req,
+            &jobs,
+            &counts,
+            signals,
+            screening.samples(),
+            &mut outcome,
+        )?;
     }
     Ok(outcome)
 }
@@ -420,16 +523,15 @@ struct Extended {
     structure: ModelStructure,
     candidates: Vec<Candidate>,
     params: Vec<Vec<usize>>,
-    fit: Accumulator,
-    validation: Accumulator,
 }
 
 impl Extended {
-    /// Candidates for data whose optional signals are those of `first` (a chunk of it).
+    /// Named candidates for data with `signals`, plus the generic-pool terms that
+    /// survive screening on `screening` (thinned fit samples).
     fn new(
         req: &FitRequest,
         fit: &Fit,
-        first: &SampleChunk,
+        signals: OptionalSignals,
         screening: &SampleChunk,
         options: &DiagnoseOptions,
     ) -> Result<Self, PipelineError> {
@@ -437,14 +539,12 @@ impl Extended {
             vehicle: &req.vehicle,
             structure: &req.structure,
             theta: &fit.mmr.theta,
-            has_height: first.height.len() == first.len(),
-            has_omega_dot: first.has_omega_dot(),
-            has_attitude: first.attitude[0].len() == first.len(),
+            has_height: signals.height,
+            has_omega_dot: signals.omega_dot,
+            has_attitude: signals.attitude,
         };
         let set = candidate_set(&ctx, Some(screening), options).map_err(input_error)?;
         Ok(Self {
-            fit: Accumulator::new(&set.extended),
-            validation: Accumulator::new(&set.extended),
             structure: set.extended,
             candidates: set.candidates,
             params: set.params,
@@ -452,104 +552,207 @@ impl Extended {
     }
 }
 
+/// What every log's second pass shares (read only).
+struct PassContext<'a> {
+    req: &'a FitRequest,
+    /// MMR estimates θ̂ in `req.structure.params` order.
+    theta: &'a [f64],
+    /// An empty residual pass to start each log from.
+    residuals: ResidualPass,
+    /// Candidate effects, when diagnosing.
+    extended: Option<Extended>,
+    /// Plot decimation: every `stride`-th sample of the whole run (fit, validation).
+    strides: [u64; 2],
+}
+
+/// One log's share of the second pass. Shares merge in job order into the result of a
+/// pass over all logs one after another.
+struct LogPass {
+    residuals: ResidualPass,
+    /// Plot series (fit, validation); time counted from `span.0` of the kind.
+    series: [PlotSeries; 2],
+    /// First and last sample time of each kind in this log, s (NaN when none).
+    span: [(f64, f64); 2],
+    /// Candidate-effect statistics (fit, validation), when diagnosing.
+    candidates: Option<[Accumulator; 2]>,
+}
+
 /// Streams the data again: residual diagnostics of the fit samples, decimated series of
-/// both parts for plots, and the statistics of every candidate effect.
+/// both parts for plots, and the statistics of every candidate effect. Logs are passed
+/// on up to `req.threads` threads and their shares merged in job order, so the result
+/// does not depend on the thread count.
 fn second_pass(
     req: &FitRequest,
     jobs: &[(PathBuf, Role)],
+    counts: &[LogCounts],
+    signals: Option<OptionalSignals>,
     screening: &SampleChunk,
     out: &mut FitOutcome,
 ) -> Result<(), PipelineError> {
-    let mut pass = ResidualPass::new(&req.structure, &out.fit, DiagnosticOptions::default());
-    let model = crate::identified::IdentifiedModel::new(
-        req.vehicle.clone(),
-        req.structure.clone(),
-        &out.fit.mmr.theta,
-        &vec![0.0; out.fit.mmr.theta.len()],
-    );
     let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
-    let strides = [
-        stride(out.fit_stats.count()),
-        stride(out.validation_stats.count()),
-    ];
-    let mut seen = [0u64; 2];
+    let ctx = PassContext {
+        req,
+        theta: &out.fit.mmr.theta,
+        residuals: ResidualPass::new(&req.structure, &out.fit, DiagnosticOptions::default()),
+        extended: match (&req.diagnose, signals) {
+            (Some(options), Some(s)) => Some(Extended::new(req, &out.fit, s, screening, options)?),
+            _ => None,
+        },
+        strides: [
+            stride(out.fit_stats.count()),
+            stride(out.validation_stats.count()),
+        ],
+    };
+    // Samples of each kind before each log: its first sample's place in the decimation.
+    let starts: Vec<[u64; 2]> = counts
+        .iter()
+        .scan([0u64; 2], |seen, c| {
+            let start = *seen;
+            seen[0] += c.0[0];
+            seen[1] += c.0[1];
+            Some(start)
+        })
+        .collect();
+    let shares = run_jobs(jobs, req, |i, path, role, overlap| {
+        pass_log(&ctx, path, role, overlap, starts[i])
+    })?;
+    let mut shares = shares.into_iter();
+    let Some(mut first) = shares.next() else {
+        return Ok(());
+    };
     let mut t_offset = [0.0f64; 2];
-    let mut ws = Workspace::default();
-    let mut extended: Option<Extended> = None;
-    for (path, role) in jobs {
-        let mut reader = open(path, req)?;
-        let mut split = Splitter::new(*role);
-        let mut span = [(f64::NAN, f64::NAN); 2];
-        let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), PipelineError> {
-            let k = usize::from(to_validation);
-            if let (Some(options), None) = (&req.diagnose, &extended) {
-                extended = Some(Extended::new(req, &out.fit, part, screening, options)?);
-            }
-            if let Some(ext) = extended.as_mut() {
-                let acc = if to_validation {
-                    &mut ext.validation
-                } else {
-                    &mut ext.fit
-                };
-                acc.push(&ext.structure, part, &mut ws)
-                    .map_err(input_error)?;
-            }
-            if !to_validation {
-                pass.push(part, &mut ws).map_err(input_error)?;
-            }
-            let y = model.predict_chunk(part, &mut ws).map_err(input_error)?;
-            let series = if to_validation {
-                &mut out.validation_series
-            } else {
-                &mut out.fit_series
-            };
-            if span[k].0.is_nan() {
-                span[k].0 = part.t[0];
-            }
-            for (i, &t) in part.t.iter().enumerate() {
-                if seen[k] % strides[k] == 0 {
-                    series.t.push(t - span[k].0 + t_offset[k]);
-                    for a in Axis::ALL {
-                        series.measured[a as usize].push(part.wrench[a as usize][i]);
-                        series.predicted[a as usize].push(y[a as usize][i]);
-                    }
-                }
-                seen[k] += 1;
-            }
-            span[k].1 = part.t[part.len() - 1];
-            Ok(())
-        };
-        for chunk in coalesce(reader.by_ref()) {
-            let chunk = chunk.map_err(input_error)?;
-            count_progress(req, &chunk);
-            split.route(&chunk, &mut sink)?;
-        }
-        split.finish(&mut sink)?;
-        // Lay logs end to end on the plots' time axis.
-        for k in 0..2 {
-            if span[k].0.is_finite() {
-                t_offset[k] += span[k].1 - span[k].0;
+    lay_end_to_end(
+        &first,
+        &mut t_offset,
+        &mut out.fit_series,
+        &mut out.validation_series,
+    );
+    for share in shares {
+        first.residuals.merge(&share.residuals);
+        if let (Some(acc), Some(later)) = (first.candidates.as_mut(), &share.candidates) {
+            for (a, b) in acc.iter_mut().zip(later) {
+                a.merge(b).map_err(input_error)?;
             }
         }
+        lay_end_to_end(
+            &share,
+            &mut t_offset,
+            &mut out.fit_series,
+            &mut out.validation_series,
+        );
     }
-    let diagnostics = pass.finish();
+    let diagnostics = first.residuals.finish();
     let inflation = coloured_variance_inflation(&diagnostics);
     out.diagnostics = Some(diagnostics);
-    if let (Some(mut options), Some(ext)) = (req.diagnose, extended) {
+    if let (Some(mut options), Some(ext), Some([fit, validation])) =
+        (req.diagnose, ctx.extended, first.candidates)
+    {
         options.variance_inflation = options.variance_inflation.max(inflation);
         let stats = CandidateStatistics {
             extended: &ext.structure,
             candidates: &ext.candidates,
             candidate_params: &ext.params,
             base_params: req.structure.params.len(),
-            fit: &ext.fit,
-            validation: &ext.validation,
+            fit: &fit,
+            validation: &validation,
         };
         out.diagnosis = Some(
             diagnose(&stats, &req.fit, &options).map_err(|e| PipelineError::Fit(e.to_string()))?,
         );
     }
     Ok(())
+}
+
+/// Appends a log's plot series after the logs before it on the plots' time axis
+/// (`t_offset`: time already laid out per kind, s).
+fn lay_end_to_end(
+    share: &LogPass,
+    t_offset: &mut [f64; 2],
+    fit: &mut PlotSeries,
+    validation: &mut PlotSeries,
+) {
+    for (k, series) in [fit, validation].into_iter().enumerate() {
+        let part = &share.series[k];
+        series.t.extend(part.t.iter().map(|t| t + t_offset[k]));
+        for a in 0..6 {
+            series.measured[a].extend_from_slice(&part.measured[a]);
+            series.predicted[a].extend_from_slice(&part.predicted[a]);
+        }
+        let (first, last) = share.span[k];
+        if first.is_finite() {
+            t_offset[k] += last - first;
+        }
+    }
+}
+
+/// The second pass over one log; `seen` counts the samples of each kind in the logs
+/// before it.
+fn pass_log(
+    ctx: &PassContext,
+    path: &Path,
+    role: Role,
+    overlap: bool,
+    mut seen: [u64; 2],
+) -> Result<LogPass, PipelineError> {
+    let req = ctx.req;
+    let mut share = LogPass {
+        residuals: ctx.residuals.clone(),
+        series: Default::default(),
+        span: [(f64::NAN, f64::NAN); 2],
+        candidates: ctx.extended.as_ref().map(|e| {
+            [
+                Accumulator::new(&e.structure),
+                Accumulator::new(&e.structure),
+            ]
+        }),
+    };
+    let mut ws = Workspace::default();
+    let mut split = Splitter::new(role);
+    let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), PipelineError> {
+        let k = usize::from(to_validation);
+        if let (Some(ext), Some(acc)) = (&ctx.extended, share.candidates.as_mut()) {
+            acc[k]
+                .push(&ext.structure, part, &mut ws)
+                .map_err(input_error)?;
+        }
+        // Leaves the base regressors of `part` in `ws` for the plotted predictions.
+        if to_validation {
+            req.structure.assemble(part, &mut ws).map_err(input_error)?;
+        } else {
+            share.residuals.push(part, &mut ws).map_err(input_error)?;
+        }
+        let span = &mut share.span[k];
+        if span.0.is_nan() {
+            span.0 = part.t[0];
+        }
+        span.1 = part.t[part.len() - 1];
+        let series = &mut share.series[k];
+        for (i, &t) in part.t.iter().enumerate() {
+            if (seen[k] + i as u64).is_multiple_of(ctx.strides[k]) {
+                series.t.push(t - span.0);
+                for a in Axis::ALL {
+                    series.measured[a as usize].push(part.wrench[a as usize][i]);
+                    series.predicted[a as usize].push(predicted(ctx, &ws, part, a, i));
+                }
+            }
+        }
+        seen[k] += part.len() as u64;
+        Ok(())
+    };
+    stream_log(path, req, overlap, |chunk| split.route(chunk, &mut sink))?;
+    split.finish(&mut sink)?;
+    Ok(share)
+}
+
+/// Model output of `axis` for sample `i` of `part`, whose base regressors are in `ws`:
+/// the measured output less the corrected one (the known terms) plus Σ θ̂ x.
+fn predicted(ctx: &PassContext, ws: &Workspace, part: &SampleChunk, axis: Axis, i: usize) -> f64 {
+    let structure = &ctx.req.structure;
+    let mut y = part.wrench[axis as usize][i] - ws.output(axis)[i];
+    for j in structure.axis_columns(axis) {
+        y += ctx.theta[structure.columns[j].param] * ws.column(j)[i];
+    }
+    y
 }
 
 /// (1 + ρ)/(1 − ρ) for the largest lag-1 residual autocorrelation ρ over the axes (an

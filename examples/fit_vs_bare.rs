@@ -1,0 +1,241 @@
+//! End-to-end `mrsysid fit` against a bare `csv::ByteRecord` pass over the same file, in
+//! one run: wall time, peak RSS of the `fit` process, and two logs on one vs two threads.
+//!
+//! ```text
+//! cargo build --release
+//! cargo run --release --example fit_vs_bare -- 1000000
+//! cargo run --release --example fit_vs_bare -- 10000000
+//! ```
+//!
+//! The argument is the row count. The 1 M-row quad× sweep is simulated once with
+//! `target/release/mrsysid simulate --preset quad_x --mode sweep --points 1000000 --seed 9`
+//! into `$MRSYSID_BENCH_DIR` (default: the system temp dir) and kept there for later
+//! runs; a 10 M-row log is that sweep written ten times, each copy shifted in time past
+//! the one before (time strictly increasing), because simulating 10 M sweep points takes
+//! minutes. The second log of the two-log runs is the first shifted in time once more
+//! (same size, different bytes). Nothing is written into the repository.
+//!
+//! Each timing is one run after a warm-up read of the file (page cache warm for all):
+//! on a shared machine take the figures as indicative and rerun.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+const SWEEP_ROWS: u64 = 1_000_000;
+
+fn main() {
+    let rows: u64 = std::env::args()
+        .nth(1)
+        .map(|a| a.parse().expect("row count: a whole number"))
+        .unwrap_or(SWEEP_ROWS);
+    assert!(
+        rows.is_multiple_of(SWEEP_ROWS),
+        "row count must be a multiple of {SWEEP_ROWS}"
+    );
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let bin = root.join("target/release/mrsysid");
+    assert!(
+        bin.exists(),
+        "build the binary first: cargo build --release"
+    );
+    let vehicle = root.join("data/vehicles/quad_x.toml");
+    let dir = std::env::var_os("MRSYSID_BENCH_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir);
+    let sweep = dir.join("mrsysid-sweep-1m.csv");
+    if !sweep.exists() {
+        simulate(&bin, &sweep);
+    }
+    let copies = rows / SWEEP_ROWS;
+    let log = dir.join(format!("mrsysid-fit-{rows}.csv"));
+    let second = dir.join(format!("mrsysid-fit-{rows}-b.csv"));
+    shifted_copies(&sweep, &log, copies, 0);
+    shifted_copies(&sweep, &second, copies, copies);
+    let mb = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len()) / 1_000_000;
+    println!("log: {} ({} rows, {} MB)", log.display(), rows, mb(&log));
+
+    bare_pass(&log); // warm the page cache
+    let (bare, records) = bare_pass(&log);
+    assert_eq!(records, rows, "bare pass record count");
+    bare_pass(&second);
+    let bare_two = bare_pass(&log).0 + bare_pass(&second).0;
+
+    let fit = |logs: &[&Path], threads: usize, diagnose: bool| {
+        let mut cmd = Command::new(&bin);
+        cmd.arg("fit").args(logs).arg("--vehicle").arg(&vehicle);
+        cmd.args(["--quiet", "--threads", &threads.to_string()]);
+        if !diagnose {
+            cmd.arg("--no-diagnose");
+        }
+        run_measured(cmd)
+    };
+    println!();
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!("load average before the fits: {}", load.trim());
+    println!(
+        "{:<44} {:>9} {:>10} {:>8} {:>13}",
+        "run", "wall, s", "× bare", "CPU, s", "peak RSS, MB"
+    );
+    let row = |name: &str, m: Measured, base: Duration| {
+        println!(
+            "{:<44} {:>9.2} {:>10.2} {:>8.2} {:>13.1}",
+            name,
+            m.wall.as_secs_f64(),
+            m.wall.as_secs_f64() / base.as_secs_f64(),
+            m.cpu.as_secs_f64(),
+            m.rss as f64 / 1024.0
+        );
+    };
+    println!(
+        "{:<44} {:>9.2} {:>10.2} {:>8} {:>13}",
+        "bare csv::ByteRecord pass (in process)",
+        bare.as_secs_f64(),
+        1.0,
+        "-",
+        "-"
+    );
+    row(
+        "fit --no-diagnose --threads 1",
+        fit(&[&log], 1, false),
+        bare,
+    );
+    row(
+        "fit --no-diagnose --threads 2",
+        fit(&[&log], 2, false),
+        bare,
+    );
+    row(
+        "fit (with diagnosis) --threads 1",
+        fit(&[&log], 1, true),
+        bare,
+    );
+    row(
+        "fit (with diagnosis) --threads 2",
+        fit(&[&log], 2, true),
+        bare,
+    );
+    let one = fit(&[&log, &second], 1, false);
+    let two = fit(&[&log, &second], 2, false);
+    row("two logs, fit --no-diagnose --threads 1", one, bare_two);
+    row("two logs, fit --no-diagnose --threads 2", two, bare_two);
+    println!(
+        "two logs: 1 thread / 2 threads = {:.2}× (× bare is against both bare passes, {:.2} s)",
+        one.wall.as_secs_f64() / two.wall.as_secs_f64(),
+        bare_two.as_secs_f64()
+    );
+}
+
+/// Simulates the 1 M-point quad× sweep into `out`.
+fn simulate(bin: &Path, out: &Path) {
+    println!("simulating {} (minutes) ...", out.display());
+    let status = Command::new(bin)
+        .args(["simulate", "--preset", "quad_x", "--mode", "sweep"])
+        .args(["--points", &SWEEP_ROWS.to_string(), "--seed", "9", "--out"])
+        .arg(out)
+        .status()
+        .expect("run mrsysid simulate");
+    assert!(status.success(), "mrsysid simulate failed");
+}
+
+/// Writes `copies` copies of the CSV `src` to `out` (unless it exists), copy k's time
+/// shifted by (`first` + k) × (time span of `src` + its first step).
+fn shifted_copies(src: &Path, out: &Path, copies: u64, first: u64) {
+    if out.exists() {
+        return;
+    }
+    let times: Vec<f64> = lines(src).skip(1).take(2).map(|l| time_of(&l)).collect();
+    let last = lines(src).last().map(|l| time_of(&l)).expect("rows");
+    let period = last - times[0] + (times[1] - times[0]);
+    let tmp = out.with_extension("partial");
+    let mut w = BufWriter::new(File::create(&tmp).expect("create log"));
+    for k in 0..copies {
+        let offset = (first + k) as f64 * period;
+        for (i, line) in lines(src).enumerate() {
+            if i == 0 {
+                if k == 0 {
+                    writeln!(w, "{line}").expect("write");
+                }
+                continue;
+            }
+            if offset == 0.0 {
+                writeln!(w, "{line}").expect("write");
+            } else {
+                let (_, rest) = line.split_once(',').expect("time field");
+                writeln!(w, "{},{rest}", time_of(&line) + offset).expect("write");
+            }
+        }
+    }
+    w.flush().expect("write");
+    drop(w);
+    std::fs::rename(&tmp, out).expect("rename log");
+}
+
+fn lines(path: &Path) -> impl Iterator<Item = String> {
+    BufReader::new(File::open(path).expect("open log"))
+        .lines()
+        .map(|l| l.expect("read log"))
+}
+
+fn time_of(line: &str) -> f64 {
+    line.split(',')
+        .next()
+        .and_then(|t| t.parse().ok())
+        .expect("time field")
+}
+
+/// Reads every record of `path` as bytes (no parsing); wall time and record count.
+fn bare_pass(path: &Path) -> (Duration, u64) {
+    let start = Instant::now();
+    let mut reader = csv::ReaderBuilder::new()
+        .from_path(path)
+        .expect("open for the bare pass");
+    let mut record = csv::ByteRecord::new();
+    let (mut records, mut bytes) = (0u64, 0usize);
+    while reader.read_byte_record(&mut record).expect("bare pass") {
+        records += 1;
+        bytes += record.as_slice().len();
+    }
+    std::hint::black_box(bytes);
+    (start.elapsed(), records)
+}
+
+/// What one `fit` run cost.
+#[derive(Debug, Clone, Copy)]
+struct Measured {
+    wall: Duration,
+    /// User + system CPU time.
+    cpu: Duration,
+    /// Peak resident set size, KiB.
+    rss: u64,
+}
+
+/// Runs `cmd` to completion; its wall time, CPU time and peak resident set size (from
+/// the kernel's accounting of that child alone via `wait4`).
+// The child is reaped by `wait4` (which also returns its own resource usage), not by
+// `Child::wait`.
+#[allow(clippy::zombie_processes)]
+fn run_measured(mut cmd: Command) -> Measured {
+    let start = Instant::now();
+    let child = cmd.spawn().expect("spawn mrsysid fit");
+    let pid = child.id() as libc::pid_t;
+    let mut status = 0;
+    // SAFETY: `usage` is a plain C struct the kernel fills in; `pid` is our own child,
+    // reaped here (the `Child` handle is not waited on afterwards).
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let reaped = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    let wall = start.elapsed();
+    assert_eq!(reaped, pid, "wait4");
+    assert!(
+        libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
+        "mrsysid fit failed: {cmd:?}"
+    );
+    let secs = |t: libc::timeval| Duration::new(t.tv_sec as u64, t.tv_usec as u32 * 1000);
+    Measured {
+        wall,
+        cpu: secs(usage.ru_utime) + secs(usage.ru_stime),
+        rss: usage.ru_maxrss as u64,
+    }
+}
