@@ -78,15 +78,19 @@ fn assert_decimated(series: &PlotSeries, samples: u64) {
 
 #[test]
 fn one_two_and_four_threads_give_the_same_report() {
-    // Three logs of 10 s (1000 samples at 100 Hz): each holds one 2 s validation segment.
+    // Logs of 11.01 s and 30 s at 100 Hz (2 s segments, every 5th held out): 901 + 901
+    // + 2400 fit samples, so the plot stride is 2 and the second log's first sample has
+    // an odd place in the run: decimating each log from zero would plot one point too
+    // many there.
     let logs = [
-        flight_part("a.csv", 0..1000),
-        flight_part("b.csv", 1000..2000),
-        flight_part("c.csv", 2000..3000),
+        flight_part("a.csv", 0..1101),
+        flight_part("b.csv", 1101..2202),
+        flight_part("c.csv", 0..3000),
     ];
     let logs: Vec<&Path> = logs.iter().map(|p| p.as_path()).collect();
     let one = pipeline::run(&request(&logs, 1)).expect("fit on one thread");
     assert!(one.diagnosis.is_some() && one.diagnostics.is_some());
+    assert_eq!(one.fit_stats.count(), 901 + 901 + 2400);
     assert_decimated(&one.fit_series, one.fit_stats.count());
     assert_decimated(&one.validation_series, one.validation_stats.count());
     // Two threads: two logs at a time; four threads: reading overlapped within a log.
