@@ -1046,7 +1046,7 @@ fn wake_immersion(hubs: &[[f64; 2]], i: usize, radius: f64, nu0: f64, u: f64, v:
 fn vortex_ring_onset(descent: f64, vh: f64, nu0: f64) -> f64 {
     let x = (descent / nu0 - 1.0) / 0.5;
     let y = vh / nu0;
-    (-x * x).exp() * (-y * y).exp()
+    (-(x * x + y * y)).exp()
 }
 
 /// The values of signal `s` for the `n` samples of `chunk`; computed signals live at
