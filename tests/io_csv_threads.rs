@@ -4,7 +4,7 @@
 
 mod io_support;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use io_support::quad;
 use mrsysid::io::contract_csv::BATCH_RECORDS;
@@ -40,7 +40,7 @@ fn column(name: &str) -> usize {
     HEADER.split(',').position(|c| c == name).unwrap()
 }
 
-fn first_error(path: &PathBuf) -> String {
+fn first_error(path: &Path) -> String {
     let reader = open_log(path, &quad(0.0), None, &ReadOptions::default()).unwrap();
     for c in reader {
         if let Err(e) = c {
