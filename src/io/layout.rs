@@ -35,11 +35,14 @@ impl NormalEquations {
 
     /// Adds one observation.
     pub fn push(&mut self, x: &[f64], y: f64) {
-        for r in 0..self.n {
-            for c in r..self.n {
-                self.xtx[r * self.n + c] += x[r] * x[c];
+        let n = self.n;
+        let x = &x[..n];
+        for (r, (&xr, xty)) in x.iter().zip(&mut self.xty).enumerate() {
+            let upper = &mut self.xtx[r * n + r..(r + 1) * n];
+            for (dst, &xc) in upper.iter_mut().zip(&x[r..]) {
+                *dst += xr * xc;
             }
-            self.xty[r] += x[r] * y;
+            *xty += xr * y;
         }
         self.yty += y * y;
         self.sum_y += y;

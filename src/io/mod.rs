@@ -213,7 +213,6 @@ pub struct LogReader {
     unit_stats: UnitStats,
     times: Vec<f64>,
     weights: Vec<f64>,
-    scratch: Vec<f64>,
     is_mcap: bool,
 }
 
@@ -406,7 +405,6 @@ impl LogReader {
             unit_stats: UnitStats::default(),
             times: Vec::new(),
             weights: Vec::new(),
-            scratch: Vec::new(),
             is_mcap,
         }
     }
@@ -746,8 +744,8 @@ impl LogReader {
             (Signal::RotorSpeeds, self.vehicle.rotors),
             (force_signal, 3),
         ];
+        const WIDTH: usize = 2 * SPIKE_HALF_WINDOW + 1;
         for (signal, count) in groups {
-            let mut spiked = false;
             let floor = spike_floor(signal);
             let value = |r: &Row, comp: usize| match signal {
                 Signal::Rates => r.rates[comp],
@@ -755,22 +753,20 @@ impl LogReader {
                 Signal::Force => r.force[comp],
                 _ => r.specific_force[comp],
             };
-            let centre = &self.window[k];
-            let neighbours = self.window.range(lo..lo + 2 * SPIKE_HALF_WINDOW + 1);
+            let mut spiked = false;
             for comp in 0..count {
+                // The neighbourhood, read once into a stack array for both tests.
+                let mut window = [0.0; WIDTH];
+                for (v, r) in window.iter_mut().zip(self.window.range(lo..lo + WIDTH)) {
+                    *v = value(r, comp);
+                }
                 // Exact pre-test: the median is a window value, so a centre within
                 // `floor` of every neighbour cannot depart from it by more than `floor`.
-                let x = value(centre, comp);
-                if neighbours
-                    .clone()
-                    .all(|r| (value(r, comp) - x).abs() <= floor)
-                {
+                let x = window[SPIKE_HALF_WINDOW];
+                if window.iter().all(|v| (v - x).abs() <= floor) {
                     continue;
                 }
-                self.scratch.clear();
-                self.scratch
-                    .extend(neighbours.clone().map(|r| value(r, comp)));
-                spiked |= is_spike(&mut self.scratch, floor);
+                spiked |= is_spike(&mut window, floor);
             }
             if spiked {
                 *self
