@@ -184,8 +184,14 @@ fn input_error(e: impl std::fmt::Display) -> PipelineError {
     PipelineError::Input(e.to_string())
 }
 
-fn open(path: &Path, req: &FitRequest) -> Result<LogReader, PipelineError> {
-    io::open_log(path, &req.vehicle, req.mapping.as_ref(), &req.read).map_err(input_error)
+/// Opens a log; its CSV tokeniser gets a thread of its own only with `spare_thread`
+/// (the thread budget allows it), so `--threads N` bounds the threads at work.
+fn open(path: &Path, req: &FitRequest, spare_thread: bool) -> Result<LogReader, PipelineError> {
+    let read = ReadOptions {
+        reader_thread: req.read.reader_thread && spare_thread,
+        ..req.read
+    };
+    io::open_log(path, &req.vehicle, req.mapping.as_ref(), &read).map_err(input_error)
 }
 
 /// Reads one log, routing each sample to the fit or validation statistics.
@@ -246,7 +252,7 @@ fn stream_log(
         consume(&chunk)
     };
     if !overlap {
-        let mut reader = open(path, req)?;
+        let mut reader = open(path, req, false)?;
         for chunk in coalesce(reader.by_ref()) {
             feed(chunk)?;
         }
@@ -256,7 +262,7 @@ fn stream_log(
     std::thread::scope(|scope| {
         // The reader is opened on its own thread (it is not `Send`).
         let producer = scope.spawn(move || -> Result<Summary, PipelineError> {
-            let mut reader = open(path, req)?;
+            let mut reader = open(path, req, true)?;
             for chunk in coalesce(reader.by_ref()) {
                 let failed = chunk.is_err();
                 // A closed channel means the consumer stopped on an error of its own.

@@ -40,14 +40,29 @@ fn column(name: &str) -> usize {
     HEADER.split(',').position(|c| c == name).unwrap()
 }
 
+/// The first error reading `path`, the same with the tokeniser on its own thread and
+/// inline (`--threads 1`).
 fn first_error(path: &Path) -> String {
-    let reader = open_log(path, &quad(0.0), None, &ReadOptions::default()).unwrap();
-    for c in reader {
-        if let Err(e) = c {
-            return e.to_string();
+    let read = |reader_thread: bool| {
+        let opts = ReadOptions {
+            reader_thread,
+            ..ReadOptions::default()
+        };
+        let reader = open_log(path, &quad(0.0), None, &opts).unwrap();
+        for c in reader {
+            if let Err(e) = c {
+                return e.to_string();
+            }
         }
-    }
-    panic!("{}: no error", path.display())
+        panic!("{}: no error", path.display())
+    };
+    let threaded = read(true);
+    assert_eq!(
+        threaded,
+        read(false),
+        "threaded and inline tokenising differ"
+    );
+    threaded
 }
 
 #[test]
@@ -130,11 +145,18 @@ fn dropped_rows_are_counted_on_both_sides_of_batch_boundaries() {
             f[column("mx")] = "mx?".into();
         }
     });
-    let opts = ReadOptions {
-        invalid: InvalidSamples::DropAndCount,
-        ..ReadOptions::default()
-    };
-    let mut reader = open_log(&path, &quad(0.0), None, &opts).unwrap();
+    for reader_thread in [true, false] {
+        let opts = ReadOptions {
+            invalid: InvalidSamples::DropAndCount,
+            reader_thread,
+            ..ReadOptions::default()
+        };
+        check_drops(&path, &opts, n, &bad);
+    }
+}
+
+fn check_drops(path: &Path, opts: &ReadOptions, n: usize, bad: &[usize; 3]) {
+    let mut reader = open_log(path, &quad(0.0), None, opts).unwrap();
     let samples: usize = reader.by_ref().map(|c| c.unwrap().len()).sum();
     let s = reader.summary();
     assert_eq!(samples, n - bad.len());

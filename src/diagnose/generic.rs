@@ -104,12 +104,12 @@ fn label(m: &[usize]) -> String {
         .join("*")
 }
 
-/// Monomial values on `data`, column-major (`len` values per monomial).
+/// Monomial values on `data`: column j of the returned workspace is monomial j.
 fn evaluate(
     like: &ModelStructure,
     pool: &[Vec<usize>],
     data: &SampleChunk,
-) -> Result<Vec<Vec<f64>>, ModelError> {
+) -> Result<Workspace, ModelError> {
     let (mut s, _) = like.subset(&[]);
     for m in pool {
         let factors: Vec<Signal> = m.iter().map(|&v| VARIABLES[v].0).collect();
@@ -130,7 +130,7 @@ fn evaluate(
     }
     let mut ws = Workspace::default();
     s.assemble(data, &mut ws)?;
-    Ok((0..pool.len()).map(|j| ws.column(j).to_vec()).collect())
+    Ok(ws)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -210,6 +210,7 @@ pub fn screen(
     let mut ws = Workspace::default();
     extended.assemble(data, &mut ws)?;
     let values = evaluate(extended, &pool, data)?;
+    let monomial = |j: usize| values.column(j);
     let tests = (pool.len() * Axis::ALL.len()) as f64;
     let mut out = Vec::new();
     for axis in Axis::ALL {
@@ -224,9 +225,8 @@ pub fn screen(
             if dof < 1.0 || sse <= 0.0 {
                 break;
             }
-            let best = values
-                .iter()
-                .enumerate()
+            let best = (0..pool.len())
+                .map(|j| (j, monomial(j)))
                 .filter_map(|(j, g)| {
                     let g2 = basis.orthogonal_norm2(g);
                     (g2 > 1e-9 * dot(g, g)).then(|| (j, dot(g, &r).powi(2) / g2))
@@ -239,7 +239,7 @@ pub fn screen(
             if !(p < options.alpha && drop >= options.min_drop) {
                 break;
             }
-            let g = &values[j];
+            let g = monomial(j);
             out.push(Screened {
                 axis,
                 label: label(&pool[j]),

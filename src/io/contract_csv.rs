@@ -1,7 +1,8 @@
 //! Streaming CSV source: only the mapped columns parsed, memory bounded whatever the file
 //! size.
 //!
-//! Tokenising (the `csv` crate splitting bytes into records) runs on its own thread, one
+//! Tokenising (the `csv` crate splitting bytes into records) runs on its own thread
+//! ([`crate::io::ReadOptions::reader_thread`]; else inline, for a one-thread budget), one
 //! batch of records ahead of the parsing and checking on the caller's thread: the two
 //! cost about the same, so a large file reads in roughly the time of a bare tokenising
 //! pass. Batches arrive in file order and a read error travels after the records before
@@ -95,18 +96,18 @@ impl EarlySlots {
     }
 }
 
-/// Tokenising thread: fills batches (reusing those the parser sent back) until end of
-/// file, a read error, or the parser hung up.
-fn tokenise(
-    mut reader: csv::Reader<BufReader<File>>,
+/// The csv reader of a file with what it needs to fill batches.
+struct Tokeniser {
+    reader: csv::Reader<BufReader<File>>,
     file: String,
     slots: EarlySlots,
-    full: SyncSender<Batch>,
-    empty: Receiver<Batch>,
-) {
-    let k = slots.columns.len();
-    loop {
-        let mut batch = empty.try_recv().unwrap_or_else(|_| Batch::new(k));
+}
+
+impl Tokeniser {
+    /// Refills `batch` with up to [`BATCH_RECORDS`] records; sets `batch.end` at end of
+    /// file or on a read error (after the records before it).
+    fn fill(&mut self, batch: &mut Batch) {
+        let k = self.slots.columns.len();
         batch.len = 0;
         while batch.len < BATCH_RECORDS {
             let i = batch.len;
@@ -114,10 +115,11 @@ fn tokenise(
                 batch.records.push(csv::ByteRecord::new());
                 batch.early.push(Early::default());
             }
-            match reader.read_byte_record(&mut batch.records[i]) {
+            match self.reader.read_byte_record(&mut batch.records[i]) {
                 Ok(true) => {
                     let values = &mut batch.values[i * k..(i + 1) * k];
-                    slots.parse(&batch.records[i], values, &mut batch.early[i]);
+                    self.slots
+                        .parse(&batch.records[i], values, &mut batch.early[i]);
                     batch.len += 1;
                 }
                 Ok(false) => {
@@ -125,25 +127,44 @@ fn tokenise(
                     break;
                 }
                 Err(e) => {
-                    batch.end = Some(Err(csv_error(&file, &e)));
+                    batch.end = Some(Err(csv_error(&self.file, &e)));
                     break;
                 }
             }
         }
-        let last = batch.end.is_some();
-        if full.send(batch).is_err() || last {
-            return;
+    }
+
+    /// Tokenising thread: fills batches (reusing those the parser sent back) until end
+    /// of file, a read error, or the parser hung up.
+    fn run(mut self, full: SyncSender<Batch>, empty: Receiver<Batch>) {
+        let k = self.slots.columns.len();
+        loop {
+            let mut batch = empty.try_recv().unwrap_or_else(|_| Batch::new(k));
+            self.fill(&mut batch);
+            let last = batch.end.is_some();
+            if full.send(batch).is_err() || last {
+                return;
+            }
         }
     }
+}
+
+/// Where the parser's batches come from.
+enum Feed {
+    /// A tokenising thread, over a bounded channel, with parsed batches sent back.
+    Thread {
+        batches: Receiver<Batch>,
+        recycle: Sender<Batch>,
+    },
+    /// The parser's own thread, refilling one batch in place.
+    Inline(Box<Tokeniser>),
 }
 
 /// A CSV file read row by row into the slot layout of its mapping.
 pub struct CsvSource {
     file: String,
-    /// Batches from the tokenising thread, in file order.
-    batches: Receiver<Batch>,
-    /// Parsed batches going back for reuse.
-    recycle: Sender<Batch>,
+    /// Source of the batches, in file order.
+    feed: Feed,
     /// The batch being parsed.
     batch: Batch,
     /// Next record of `batch`.
@@ -160,12 +181,14 @@ pub struct CsvSource {
 
 impl CsvSource {
     /// Opens `path`, reads the header and resolves the mapping (the contract mapping
-    /// when `mapping` is `None`) for a vehicle with `rotors` rotors.
+    /// when `mapping` is `None`) for a vehicle with `rotors` rotors. With
+    /// `reader_thread`, tokenising runs on a thread of its own.
     pub fn open(
         path: &Path,
         file: &str,
         mapping: Option<&Mapping>,
         rotors: usize,
+        reader_thread: bool,
     ) -> Result<(Self, Mapping, SlotLayout), IoError> {
         let handle = File::open(path).map_err(|e| {
             IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
@@ -221,29 +244,39 @@ impl CsvSource {
             })?;
             column_of_slot.push(idx);
         }
-        let (full_tx, full_rx) = sync_channel(BATCHES_IN_FLIGHT);
-        let (empty_tx, empty_rx) = channel();
-        let thread_file = file.to_string();
         let early_slots = column_of_slot.len() * TOKENISER_SLOT_PERCENT / 100;
-        let slots = EarlySlots {
-            columns: column_of_slot[..early_slots].to_vec(),
-            header_len: header.len(),
+        let tokeniser = Tokeniser {
+            reader,
+            file: file.to_string(),
+            slots: EarlySlots {
+                columns: column_of_slot[..early_slots].to_vec(),
+                header_len: header.len(),
+            },
         };
-        std::thread::Builder::new()
-            .name("csv-tokeniser".into())
-            .spawn(move || tokenise(reader, thread_file, slots, full_tx, empty_rx))
-            .map_err(|e| {
-                IoError::new(
-                    file,
-                    Location::File,
-                    None,
-                    ErrorKind::Read(format!("cannot start the reading thread: {e}")),
-                )
-            })?;
+        let feed = if reader_thread {
+            let (full_tx, full_rx) = sync_channel(BATCHES_IN_FLIGHT);
+            let (empty_tx, empty_rx) = channel();
+            std::thread::Builder::new()
+                .name("csv-tokeniser".into())
+                .spawn(move || tokeniser.run(full_tx, empty_rx))
+                .map_err(|e| {
+                    IoError::new(
+                        file,
+                        Location::File,
+                        None,
+                        ErrorKind::Read(format!("cannot start the reading thread: {e}")),
+                    )
+                })?;
+            Feed::Thread {
+                batches: full_rx,
+                recycle: empty_tx,
+            }
+        } else {
+            Feed::Inline(Box::new(tokeniser))
+        };
         let source = Self {
             file: file.to_string(),
-            batches: full_rx,
-            recycle: empty_tx,
+            feed,
             batch: Batch::new(early_slots),
             next: 0,
             finished: false,
@@ -264,17 +297,22 @@ impl CsvSource {
             self.finished = true;
             return end.map(|()| false);
         }
-        let batch = self.batches.recv().map_err(|_| {
-            IoError::new(
-                &self.file,
-                Location::File,
-                None,
-                ErrorKind::Read("the reading thread stopped".into()),
-            )
-        })?;
-        let done = std::mem::replace(&mut self.batch, batch);
-        // The tokeniser may have finished already; the batch is then simply dropped.
-        let _ = self.recycle.send(done);
+        match &mut self.feed {
+            Feed::Inline(tokeniser) => tokeniser.fill(&mut self.batch),
+            Feed::Thread { batches, recycle } => {
+                let batch = batches.recv().map_err(|_| {
+                    IoError::new(
+                        &self.file,
+                        Location::File,
+                        None,
+                        ErrorKind::Read("the reading thread stopped".into()),
+                    )
+                })?;
+                let done = std::mem::replace(&mut self.batch, batch);
+                // The tokeniser may have finished already; the batch is then dropped.
+                let _ = recycle.send(done);
+            }
+        }
         self.next = 0;
         Ok(true)
     }

@@ -69,6 +69,8 @@ pub struct ReadOptions {
     pub max_gap: f64,
     /// Derivation options (a mapping file's `[derive]` table overrides them).
     pub derive: DeriveOptions,
+    /// Tokenise CSV on a thread of its own (parsing overlaps reading; one more thread).
+    pub reader_thread: bool,
 }
 
 impl Default for ReadOptions {
@@ -77,6 +79,7 @@ impl Default for ReadOptions {
             invalid: InvalidSamples::Error,
             max_gap: 0.1,
             derive: DeriveOptions::default(),
+            reader_thread: true,
         }
     }
 }
@@ -282,7 +285,8 @@ pub fn open_log(
             true,
         ));
     }
-    let (source, resolved, layout) = contract_csv::CsvSource::open(path, &file, mapping, rotors)?;
+    let (source, resolved, layout) =
+        contract_csv::CsvSource::open(path, &file, mapping, rotors, opts.reader_thread)?;
     Ok(LogReader::new(
         Box::new(source),
         layout,
