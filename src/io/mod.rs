@@ -802,8 +802,12 @@ impl LogReader {
     }
 
     fn take_chunk(&mut self) -> SampleChunk {
+        // Room for as many samples as the chunk handed out: a full chunk's worth in a
+        // long segment, little in a log of short segments (a sweep is one-sample
+        // segments; reserving a full chunk per row cost a sixth of its read time).
+        let room = self.chunk.len().clamp(16, CHUNK_SAMPLES);
         let mut next =
-            SampleChunk::with_capacity(self.vehicle.rotors, CHUNK_SAMPLES, self.plan.has_omega_dot);
+            SampleChunk::with_capacity(self.vehicle.rotors, room, self.plan.has_omega_dot);
         prepare_optional(&mut next, &self.layout);
         self.last_segment = self.segment;
         std::mem::replace(&mut self.chunk, next)
