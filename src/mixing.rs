@@ -67,7 +67,7 @@ impl Mixing {
 
     /// Batch form of [`Mixing::actuators`]: `out[a][k] = Σ_i M_ix[a][i] · x_i[k]` for rotor
     /// series `x_i` (one slice per rotor, all of length `out[a].len()`). With `square`,
-    /// uses x_i[k]² (Eq. 19). Writes without allocating.
+    /// uses `x_i[k]²` (Eq. 19). Writes without allocating.
     pub fn mix_into<S: AsRef<[f64]>>(
         &self,
         rotor_series: &[S],

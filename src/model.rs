@@ -658,7 +658,7 @@ impl ModelStructure {
         }
     }
 
-    /// Model output ŷ = Σ θ[param] · column for one sample, plus the known terms:
+    /// Model output ŷ = Σ `θ[param]` · column for one sample, plus the known terms:
     /// `[F_x, F_y, F_z, M_x, M_y, M_z]` in N and N m.
     pub fn predict(&self, theta: &[f64], sample: &Sample) -> Result<[f64; 6], ModelError> {
         let mut chunk =

@@ -2,7 +2,7 @@
 //!
 //! The blade-element coefficients of Eq. 5 with the plane approximation of the momentum
 //! inflow (Eq. 6–7), and the map from blade and inflow constants to the lumped parameters
-//! of Eq. 8 / Eq. 22. The seed cites this map ("full derivation found in [26]") without
+//! of Eq. 8 / Eq. 22. The seed cites this map ("full derivation found in \[26\]") without
 //! printing it; it is derived here by expanding Eq. 5 with Eq. 7 and collecting terms:
 //!
 //! with C_σ = N_b c a / (2πR), K = C_σ(θ0/3 + θtw/4) and G = C_σ(θ0/2 + θtw/4),

@@ -68,7 +68,7 @@ pub enum ErrorKind {
 
 impl IoError {
     /// An error at `location` of `file`, about the labelled `field` when given (see
-    /// [`column`], [`field`], [`key`]).
+    /// [`column()`], [`field`], [`key`]).
     pub fn new(file: &str, location: Location, field: Option<String>, kind: ErrorKind) -> Self {
         Self {
             file: file.to_string(),

@@ -2,7 +2,7 @@
 //! sample time as a field, JSON- or ROS 2 CDR-encoded, plus the [`Mapping`] that reads them back.
 //!
 //! Topics: `/mrsysid/state` {t, velocity{x,y,z}, rates{x,y,z}[, height][, attitude{w,x,y,z}]},
-//! `/mrsysid/rotors` {t, omega[N][, omega_dot[N]]}, `/mrsysid/wrench` {t, force{x,y,z},
+//! `/mrsysid/rotors` `{t, omega[N][, omega_dot[N]]}`, `/mrsysid/wrench` {t, force{x,y,z},
 //! moment{x,y,z}}; SI units, body FRD, attitude body→NED. Message log time is t in ns.
 
 use std::collections::BTreeMap;
