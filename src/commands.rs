@@ -247,12 +247,12 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
     for (name, title, s) in [
         (
             "fit_time_histories",
-            "Fit data: measured vs model",
+            "Fit data: measured vs Eq. 22 model (before diagnosis)",
             &out.fit_series,
         ),
         (
             "validation_time_histories",
-            "Validation data: measured vs model",
+            "Validation data: measured vs Eq. 22 model (before diagnosis)",
             &out.validation_series,
         ),
     ] {
