@@ -24,8 +24,6 @@ pub struct CandidateSet {
     pub candidates: Vec<Candidate>,
     /// Parameter indices in `extended` of each candidate.
     pub params: Vec<Vec<usize>>,
-    /// The generic-pool screening, best first per axis.
-    pub screened: Vec<generic::Screened>,
 }
 
 /// The named library for `ctx` plus the generic-pool monomials that survive screening
@@ -59,7 +57,6 @@ pub fn candidate_set(
         extended,
         candidates,
         params,
-        screened,
     })
 }
 
