@@ -143,13 +143,10 @@ fn fuzz_mapping_and_vehicle_toml() {
     let mapping_text = std::fs::read("examples/neurobem.toml").unwrap();
     let vehicle_text = std::fs::read("data/vehicles/neurobem.toml").unwrap();
     let vehicle = Vehicle::from_toml_file(Path::new("data/vehicles/neurobem.toml")).unwrap();
-    let log = "data/neurobem/figure8_1_20210218170320seg2_100hz.csv";
-    let head: String = std::fs::read_to_string(log)
-        .unwrap()
-        .lines()
-        .take(40)
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let log = std::fs::File::open("data/neurobem/figure8_1_20210218170320seg2.csv.gz").unwrap();
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut flate2::read::GzDecoder::new(log), &mut text).unwrap();
+    let head: String = text.lines().take(40).map(|l| format!("{l}\n")).collect();
     let log_path = tmp("neurobem-head.csv");
     std::fs::write(&log_path, head).unwrap();
     let mut rng = rng(2);

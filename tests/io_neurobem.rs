@@ -1,5 +1,6 @@
-//! The real NeuroBEM excerpt through the shipped mapping: FLU → FRD conversion, derived
-//! F and M, layout inference signs, and agreement with the contract CSV path.
+//! The real NeuroBEM segments (gzip-compressed CSV) through the shipped mapping: FLU →
+//! FRD conversion, derived F and M, layout inference, and agreement with the contract CSV
+//! path and with the uncompressed text.
 
 mod io_support;
 
@@ -11,10 +12,13 @@ use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::Vehicle;
 
 const FILES: [&str; 3] = [
-    "data/neurobem/figure8_1_20210218170320seg2_100hz.csv",
-    "data/neurobem/melon_1_20210223114138seg3_100hz.csv",
-    "data/neurobem/racetrack_1_20210218171908seg2_100hz.csv",
+    "data/neurobem/figure8_1_20210218170320seg2.csv.gz",
+    "data/neurobem/melon_1_20210223114138seg3.csv.gz",
+    "data/neurobem/racetrack_1_20210218171908seg2.csv.gz",
 ];
+
+/// Data rows of each file (the dataset's 400 Hz segments, whole).
+const ROWS: [usize; 3] = [14306, 11431, 12724];
 
 fn read(
     path: &Path,
@@ -35,15 +39,15 @@ fn neurobem_vehicle_passes_assumption_2() {
 }
 
 #[test]
-fn neurobem_excerpt_maps_to_frd_with_derived_wrench() {
+fn neurobem_segments_map_to_frd_with_derived_wrench() {
     let vehicle = Vehicle::from_toml_file(Path::new("data/vehicles/neurobem.toml")).unwrap();
     let mapping = Mapping::from_toml_file(Path::new("examples/neurobem.toml")).unwrap();
-    for file in FILES {
+    for (file, rows) in FILES.into_iter().zip(ROWS) {
         let (c, s) = read(Path::new(file), &vehicle, Some(&mapping));
         assert_eq!(
             (c.len(), s.segments),
-            (1000, 1),
-            "{file}: 1000 rows at 100 Hz, no gap"
+            (rows, 1),
+            "{file}: every row at 400 Hz, no gap"
         );
         assert!(s.unit_warnings.is_empty(), "{file}: {:?}", s.unit_warnings);
         // First data row of figure8 (line 2 of the file): acc z = 9.742806 m/s² (FLU up)
@@ -71,9 +75,12 @@ fn neurobem_excerpt_maps_to_frd_with_derived_wrench() {
         // quaternion has 6 decimals).
         let q: Vec<f64> = (0..4).map(|a| c.attitude[a][0]).collect();
         assert!((q.iter().map(|x| x * x).sum::<f64>() - 1.0).abs() < 1e-5);
-        // The layout regression runs and reports (its signs on these short excerpts are
-        // not reliable; tests/io_derive.rs checks exact recovery on synthetic data).
-        assert_eq!(s.layout.expect("layout regression solvable").samples, 1000);
+        // The layout regression runs and reports (tests/io_derive.rs checks exact
+        // recovery on synthetic data).
+        assert_eq!(
+            s.layout.expect("layout regression solvable").samples,
+            rows as u64
+        );
     }
 }
 
@@ -86,4 +93,36 @@ fn mapped_and_contract_paths_give_identical_samples() {
     write_contract_csv(&out, [&mapped]).unwrap();
     let (contract, _) = read(&out, &vehicle, None);
     io_support::assert_same(&contract, &mapped);
+}
+
+#[test]
+fn gzip_and_plain_text_give_identical_samples() {
+    // The reader recognises gzip by its magic bytes: the decompressed text, written
+    // plain, reads to the same samples bit for bit.
+    let vehicle = Vehicle::from_toml_file(Path::new("data/vehicles/neurobem.toml")).unwrap();
+    let mapping = Mapping::from_toml_file(Path::new("examples/neurobem.toml")).unwrap();
+    let (packed, _) = read(Path::new(FILES[1]), &vehicle, Some(&mapping));
+    let mut text = Vec::new();
+    let file = std::fs::File::open(FILES[1]).unwrap();
+    std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(file), &mut text).unwrap();
+    let out = std::env::temp_dir().join(format!("neurobem-plain-{}.csv", std::process::id()));
+    std::fs::write(&out, text).unwrap();
+    let (plain, _) = read(&out, &vehicle, Some(&mapping));
+    assert_eq!(plain.len(), ROWS[1]);
+    io_support::assert_same(&plain, &packed);
+}
+
+#[test]
+fn corrupt_gzip_is_an_error_naming_the_file() {
+    // A gzip stream cut in the middle: a read error, never a panic or a silent end.
+    let bytes = std::fs::read(FILES[0]).unwrap();
+    let out = std::env::temp_dir().join(format!("neurobem-cut-{}.csv.gz", std::process::id()));
+    std::fs::write(&out, &bytes[..bytes.len() / 2]).unwrap();
+    let vehicle = Vehicle::from_toml_file(Path::new("data/vehicles/neurobem.toml")).unwrap();
+    let mapping = Mapping::from_toml_file(Path::new("examples/neurobem.toml")).unwrap();
+    let err = open_log(&out, &vehicle, Some(&mapping), &ReadOptions::default())
+        .and_then(|mut r| r.by_ref().find_map(Result::err).map_or(Ok(()), Err))
+        .expect_err("a truncated gzip stream is an error")
+        .to_string();
+    assert!(err.contains("neurobem-cut-"), "{err}");
 }

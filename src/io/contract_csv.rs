@@ -1,5 +1,6 @@
 //! Streaming CSV source: only the mapped columns parsed, memory bounded whatever the file
-//! size.
+//! size. A gzip-compressed file (`.csv.gz`, recognised by its magic bytes, not its name)
+//! is decompressed on the fly.
 //!
 //! Tokenising (the `csv` crate splitting bytes into records) runs on its own thread
 //! ([`crate::io::ReadOptions::reader_thread`]; else inline, for a one-thread budget), one
@@ -11,9 +12,11 @@
 //! records exist at any time.
 
 use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
 use std::sync::mpsc::{Receiver, Sender, SyncSender, channel, sync_channel};
+
+use flate2::read::MultiGzDecoder;
 
 use super::RowSource;
 use super::error::{ErrorKind, IoError, Location, column};
@@ -96,9 +99,25 @@ impl EarlySlots {
     }
 }
 
+/// True when the file starts with the gzip magic bytes (RFC 1952): the CSV text is then
+/// decompressed on the fly. Leaves the file at its start.
+fn is_gzip(file: &mut File) -> std::io::Result<bool> {
+    let mut magic = [0u8; 2];
+    let mut n = 0;
+    while n < magic.len() {
+        let k = file.read(&mut magic[n..])?;
+        if k == 0 {
+            break;
+        }
+        n += k;
+    }
+    file.seek(SeekFrom::Start(0))?;
+    Ok(n == 2 && magic == [0x1f, 0x8b])
+}
+
 /// The csv reader of a file with what it needs to fill batches.
 struct Tokeniser {
-    reader: csv::Reader<BufReader<File>>,
+    reader: csv::Reader<BufReader<Box<dyn Read + Send>>>,
     file: String,
     slots: EarlySlots,
 }
@@ -190,13 +209,22 @@ impl CsvSource {
         rotors: usize,
         reader_thread: bool,
     ) -> Result<(Self, Mapping, SlotLayout), IoError> {
-        let handle = File::open(path).map_err(|e| {
+        let read_error = |e: std::io::Error| {
             IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
-        })?;
+        };
+        let mut handle = File::open(path).map_err(read_error)?;
+        let source: Box<dyn Read + Send> = if is_gzip(&mut handle).map_err(read_error)? {
+            Box::new(MultiGzDecoder::new(BufReader::with_capacity(
+                1 << 16,
+                handle,
+            )))
+        } else {
+            Box::new(handle)
+        };
         let mut reader = csv::ReaderBuilder::new()
             .flexible(true)
             .buffer_capacity(1 << 16)
-            .from_reader(BufReader::with_capacity(1 << 16, handle));
+            .from_reader(BufReader::with_capacity(1 << 16, source));
         let header_record = reader
             .byte_headers()
             .map_err(|e| csv_error(file, &e))?
