@@ -10,7 +10,7 @@ use mrsysid::estimate::{self, FitOptions, ResidualDiagnostics};
 use mrsysid::identified::{IdentifiedModel, write_atomically};
 use mrsysid::io::{self, InvalidSamples, Mapping, ReadOptions};
 use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries, Validation};
+use mrsysid::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries};
 use mrsysid::report::plots::{self, AxisSeries, NormalProbability, ResidualDensity};
 use mrsysid::report::summary::{AxisRow, Report};
 use mrsysid::report::tables;
@@ -103,14 +103,11 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
         read: read_options(cmd.drop_invalid),
         structure: structure.clone(),
         fit: FitOptions::default(),
-        validation: if cmd.validate.is_empty() {
-            Validation::Holdout(Holdout {
-                segment_seconds: cmd.holdout_segment,
-                ..Holdout::default()
-            })
-        } else {
-            Validation::Logs(cmd.validate.clone())
+        holdout: Holdout {
+            segment_seconds: cmd.holdout_segment,
+            ..Holdout::default()
         },
+        validate: cmd.validate.clone(),
         threads: cmd
             .threads
             .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -125,8 +122,9 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
         &structure,
         &out.fit,
         &out.validation,
-        out.validation_stats.count(),
+        out.validation_samples,
         &out.validation_source,
+        (&out.cross_validation.0, &out.cross_validation.1),
         out.diagnostics.as_ref(),
         out.diagnosis.as_ref(),
     );

@@ -91,11 +91,13 @@ struct FitArgs {
     logs: Vec<PathBuf>,
     #[command(flatten)]
     model: ModelArgs,
-    /// Logs for the validation figures; without them every 5th 2-second segment of the
-    /// fit logs is held out.
+    /// Logs for the validation figures only: no decision (term selection, candidate
+    /// effects) sees them. Decisions are cross-validated on the fit logs: with two or
+    /// more, each log is predicted by the model fitted on the others; a single log has
+    /// every 5th 2-second segment held out.
     #[arg(long, num_args = 1..)]
     validate: Vec<PathBuf>,
-    /// Hold-out segment length, s (without --validate).
+    /// Hold-out segment length of a single fit log, s.
     #[arg(long, default_value_t = 2.0)]
     holdout_segment: f64,
     /// Write the JSON report here.

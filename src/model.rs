@@ -74,6 +74,9 @@ pub enum Signal {
     D2r,
     /// Rate of the virtual rudder δ̇r = M_ix,r Ω̇, rad/s².
     DrDot,
+    /// Rate δ̇ = M_ix,row Ω̇ of the virtual actuator of one row of Eq. 20 (0 δt, 1 δa,
+    /// 2 δe, 3 δr): a rotor-local sum Σ w_i Ω̇_i, in that actuator's unit per second.
+    ActuatorRate(u8),
     /// Σ y_i² Ω_i, m² rad/s.
     SumY2Omega,
     /// Σ x_i y_i Ω_i, m² rad/s.
@@ -421,7 +424,10 @@ impl ModelStructure {
         self.required.iter().any(|s| {
             matches!(
                 s,
-                Signal::DrDot | Signal::RotorAcceleration(_) | Signal::SquaredActuatorRate(_)
+                Signal::DrDot
+                    | Signal::ActuatorRate(_)
+                    | Signal::RotorAcceleration(_)
+                    | Signal::SquaredActuatorRate(_)
             )
         })
     }
@@ -483,6 +489,37 @@ impl ModelStructure {
         s.params = keep.iter().map(|&p| self.params[p].clone()).collect();
         s.required = s.collect_required_signals();
         (s, cols)
+    }
+
+    /// True for a control-effectiveness column: state-independent and quadratic in the
+    /// rotor speeds, a multiple of one δ² (Eq. 19) — C_T0 δ²t, δ²a, δ²e and C_Q0 δ²r,
+    /// the terms through which the virtual actuators act.
+    pub fn is_control_effectiveness(&self, j: usize) -> bool {
+        use Signal::*;
+        self.columns[j]
+            .terms
+            .iter()
+            .all(|t| matches!(t.factors[..], [D2t | D2a | D2e | D2r]))
+    }
+
+    /// The structure restricted to columns `cols` (indices into `self.columns`,
+    /// ascending) and the parameters they use, in this structure's parameter order;
+    /// also returns, for each kept parameter, its index in `self.params`.
+    pub fn select_columns(&self, cols: &[usize]) -> (ModelStructure, Vec<usize>) {
+        let mut used: Vec<usize> = cols.iter().map(|&j| self.columns[j].param).collect();
+        used.sort_unstable();
+        used.dedup();
+        let (mut s, _) = self.subset(&used);
+        s.columns = cols
+            .iter()
+            .map(|&j| {
+                let mut c = self.columns[j].clone();
+                c.param = used.binary_search(&c.param).expect("kept parameter");
+                c
+            })
+            .collect();
+        s.required = s.collect_required_signals();
+        (s, used)
     }
 
     /// Checks that `chunk` can be assembled with this structure.
@@ -581,6 +618,10 @@ impl ModelStructure {
                 mix_row(self.mixing.row(row), &chunk.omega, true, dst);
             }
             DrDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst),
+            ActuatorRate(row) => {
+                let row = rows[usize::from(row) % 4];
+                mix_row(self.mixing.row(row), &chunk.omega_dot, false, dst);
+            }
             SumY2Omega | SumXYOmega | SumX2Omega | SumSigmaYOmega | SumSigmaXOmega => {
                 let w = &self.inflow_weights[s_index(s, SumY2Omega)];
                 mix_row(w, &chunk.omega, false, dst);

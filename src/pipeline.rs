@@ -19,7 +19,8 @@ use crate::diagnose::{
     SCREENING_SAMPLES, Thinned, candidate_set, diagnose,
 };
 use crate::estimate::{
-    self, AxisMetrics, DiagnosticOptions, Fit, FitOptions, ResidualDiagnostics, ResidualPass,
+    self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, FitOptions, Folds,
+    ResidualDiagnostics, ResidualPass,
 };
 use crate::io::{self, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Workspace};
@@ -53,15 +54,6 @@ impl Holdout {
     }
 }
 
-/// Where validation figures come from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Validation {
-    /// Hold out time segments of the fit logs.
-    Holdout(Holdout),
-    /// Separate logs (the fit logs are used whole).
-    Logs(Vec<PathBuf>),
-}
-
 /// Everything `fit` needs.
 #[derive(Debug, Clone)]
 pub struct FitRequest {
@@ -77,8 +69,10 @@ pub struct FitRequest {
     pub structure: ModelStructure,
     /// Estimation options.
     pub fit: FitOptions,
-    /// Validation data.
-    pub validation: Validation,
+    /// Segment hold-out of a single fit log (cross-validation of one log).
+    pub holdout: Holdout,
+    /// Reporting-only validation logs: evaluated, never used for a decision.
+    pub validate: Vec<PathBuf>,
     /// Reader threads (≥ 1).
     pub threads: usize,
     /// Run the second pass (residual diagnostics, plot series).
@@ -128,10 +122,15 @@ pub struct FitOutcome {
     pub fit: Fit,
     /// Fit statistics (for refits with candidate effects).
     pub fit_stats: Accumulator,
-    /// Validation statistics.
+    /// Statistics of the reporting-only validation logs (no samples without them).
     pub validation_stats: Accumulator,
-    /// Goodness of fit on the validation data.
+    /// Goodness of fit of the Eq. 22 model on the validation logs when given, else
+    /// cross-validated (all folds pooled).
     pub validation: [AxisMetrics; 6],
+    /// Samples behind `validation`.
+    pub validation_samples: u64,
+    /// Cross-validation of the Eq. 22 model: fold names and held-out errors.
+    pub cross_validation: (Vec<String>, CrossValidation),
     /// Residual diagnostics of the fit data (second pass).
     pub diagnostics: Option<ResidualDiagnostics>,
     /// Fit-data series for plots (second pass).
@@ -146,10 +145,11 @@ pub struct FitOutcome {
     pub diagnosis: Option<Diagnosis>,
 }
 
-/// Fit and validation statistics of one log.
+/// Statistics of one log: the samples fitted and those held out (its hold-out segments,
+/// or all samples of a validation log).
 struct LogStats {
     fit: Accumulator,
-    validation: Accumulator,
+    held_out: Accumulator,
     /// Thinned fit samples for the generic-pool screening.
     screening: Thinned,
     summary: Summary,
@@ -202,7 +202,7 @@ fn read_log(
     overlap: bool,
 ) -> Result<LogStats, PipelineError> {
     let mut fit = Accumulator::new(&req.structure);
-    let mut validation = Accumulator::new(&req.structure);
+    let mut held_out = Accumulator::new(&req.structure);
     let mut signals = None;
     let mut screening = Thinned::new(SCREENING_SAMPLES);
     let keep_screening = req.diagnose.is_some();
@@ -210,7 +210,7 @@ fn read_log(
     let mut split = Splitter::new(role);
     let mut sink = |part: &SampleChunk, to_validation: bool| {
         let acc = if to_validation {
-            &mut validation
+            &mut held_out
         } else {
             if keep_screening {
                 screening.push(part);
@@ -226,7 +226,7 @@ fn read_log(
     split.finish(&mut sink)?;
     Ok(LogStats {
         fit,
-        validation,
+        held_out,
         screening,
         summary,
         signals,
@@ -441,20 +441,66 @@ fn run_jobs<T: Send>(
         .collect()
 }
 
+/// Fit logs first (a single one split by the hold-out), then the validation logs.
 fn jobs(req: &FitRequest) -> Vec<(PathBuf, Role)> {
-    match &req.validation {
-        Validation::Holdout(h) => req
-            .logs
-            .iter()
-            .map(|p| (p.clone(), Role::Split(*h)))
-            .collect(),
-        Validation::Logs(v) => req
-            .logs
-            .iter()
-            .map(|p| (p.clone(), Role::Fit))
-            .chain(v.iter().map(|p| (p.clone(), Role::Validation)))
-            .collect(),
+    let fit_role = if req.logs.len() == 1 {
+        Role::Split(req.holdout)
+    } else {
+        Role::Fit
+    };
+    req.logs
+        .iter()
+        .map(|p| (p.clone(), fit_role))
+        .chain(req.validate.iter().map(|p| (p.clone(), Role::Validation)))
+        .collect()
+}
+
+/// Display name of a log: its file name.
+fn log_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into(),
+    )
+}
+
+/// The fit logs' statistics ((fit, held-out) per log, job order) arranged for
+/// cross-validation and the final fit: leave one log out with two or more logs, else the
+/// log's hold-out segments. Returns the folds and the final fit data: all fit logs, the
+/// held-out segments of a single log included only when validation logs report instead.
+fn arrange(
+    req: &FitRequest,
+    parts: &[[&Accumulator; 2]],
+) -> Result<(Folds, Accumulator), PipelineError> {
+    let merged = |pair: &[&Accumulator; 2]| -> Result<Accumulator, PipelineError> {
+        let mut a = pair[0].clone();
+        a.merge(pair[1]).map_err(input_error)?;
+        Ok(a)
+    };
+    if let [single] = parts {
+        if single[1].count() == 0 {
+            return Err(PipelineError::Fit(
+                "no held-out samples: the log is shorter than one hold-out cycle; give two or more logs (each is then predicted from the others) or a shorter --holdout-segment".into(),
+            ));
+        }
+        let folds = Folds::holdout("hold-out segments", single[0].clone(), single[1].clone());
+        let fit = if req.validate.is_empty() {
+            single[0].clone()
+        } else {
+            merged(single)?
+        };
+        return Ok((folds, fit));
     }
+    let logs = parts
+        .iter()
+        .zip(&req.logs)
+        .map(|(pair, path)| Ok((log_name(path), merged(pair)?)))
+        .collect::<Result<Vec<_>, PipelineError>>()?;
+    let folds = Folds::leave_one_out(&logs).map_err(input_error)?;
+    let mut fit = logs[0].1.clone();
+    for (_, a) in &logs[1..] {
+        fit.merge(a).map_err(input_error)?;
+    }
+    Ok((folds, fit))
 }
 
 /// Runs the pipeline.
@@ -463,44 +509,61 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
     let per_log = run_jobs(&jobs, req, |_, path, role, overlap| {
         read_log(path, role, req, overlap)
     })?;
-    let mut fit_stats = Accumulator::new(&req.structure);
+    let n_fit = req.logs.len();
     let mut validation_stats = Accumulator::new(&req.structure);
     let mut screening = Thinned::new(SCREENING_SAMPLES);
-    let mut summaries = Vec::new();
-    let mut counts = Vec::new();
     let signals = per_log.iter().find_map(|s| s.signals);
-    for s in per_log {
-        fit_stats.merge(&s.fit).map_err(input_error)?;
-        validation_stats.merge(&s.validation).map_err(input_error)?;
+    for s in &per_log {
         screening.merge(&s.screening);
-        counts.push(LogCounts([s.fit.count(), s.validation.count()]));
-        summaries.push(s.summary);
     }
-    if fit_stats.count() == 0 {
+    for s in &per_log[n_fit..] {
+        validation_stats.merge(&s.held_out).map_err(input_error)?;
+    }
+    let counts: Vec<LogCounts> = per_log
+        .iter()
+        .map(|s| LogCounts([s.fit.count(), s.held_out.count()]))
+        .collect();
+    let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit]
+        .iter()
+        .map(|s| [&s.fit, &s.held_out])
+        .collect();
+    if parts.iter().all(|p| p[0].count() + p[1].count() == 0) {
         return Err(PipelineError::Fit("no samples to fit".into()));
     }
-    let fit = estimate::fit(&req.structure, &fit_stats, &req.fit)
-        .map_err(|e| PipelineError::Fit(e.to_string()))?;
-    let validation = if validation_stats.count() > 0 {
-        estimate::evaluate(&req.structure, &fit.mmr.theta, &validation_stats)
-            .map_err(|e| PipelineError::Fit(e.to_string()))?
+    let (folds, fit_stats) = arrange(req, &parts)?;
+    let summaries = per_log.into_iter().map(|s| s.summary).collect();
+    let fit_error = |e: estimate::EstimateError| PipelineError::Fit(e.to_string());
+    let fit = estimate::fit(&req.structure, &fit_stats, &req.fit).map_err(fit_error)?;
+    let cv = estimate::cross_validate(&req.structure, &folds, &req.fit).map_err(fit_error)?;
+    let (validation, validation_samples) = if validation_stats.count() > 0 {
+        let v = estimate::evaluate(&req.structure, &fit.mmr.theta, &validation_stats)
+            .map_err(fit_error)?;
+        (v, validation_stats.count())
     } else {
-        return Err(PipelineError::Fit(
-            "no validation samples: the logs are shorter than one hold-out cycle; give --validate logs or a shorter --holdout-segment".into(),
-        ));
+        (cv.pooled_metrics(), folds.test_samples())
     };
-    let validation_source = match &req.validation {
-        Validation::Holdout(h) => format!(
-            "hold-out: every {}th {:.1} s segment of the fit logs",
-            h.every, h.segment_seconds
-        ),
-        Validation::Logs(v) => format!("{} validation log(s)", v.len()),
+    let validation_source = if !req.validate.is_empty() {
+        format!(
+            "{} validation log(s), not used for any decision",
+            req.validate.len()
+        )
+    } else if n_fit > 1 {
+        format!(
+            "leave one log out over {n_fit} logs (each predicted by the model fitted on the others), pooled"
+        )
+    } else {
+        format!(
+            "hold-out: every {}th {:.1} s segment of the fit log",
+            req.holdout.every, req.holdout.segment_seconds
+        )
     };
     let mut outcome = FitOutcome {
         fit,
         fit_stats,
         validation_stats,
         validation,
+        validation_samples,
+        cross_validation: (folds.names.clone(), cv),
         diagnostics: None,
         fit_series: PlotSeries::default(),
         validation_series: PlotSeries::default(),
@@ -579,7 +642,7 @@ struct LogPass {
     series: [PlotSeries; 2],
     /// First and last sample time of each kind in this log, s (NaN when none).
     span: [(f64, f64); 2],
-    /// Candidate-effect statistics (fit, validation), when diagnosing.
+    /// Candidate-effect statistics (fitted, held-out samples), when diagnosing.
     candidates: Option<[Accumulator; 2]>,
 }
 
@@ -604,10 +667,7 @@ fn second_pass(
             (Some(options), Some(s)) => Some(Extended::new(req, &out.fit, s, screening, options)?),
             _ => None,
         },
-        strides: [
-            stride(out.fit_stats.count()),
-            stride(out.validation_stats.count()),
-        ],
+        strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.0[k]).sum())),
     };
     // Samples of each kind before each log: its first sample's place in the decimation.
     let starts: Vec<[u64; 2]> = counts
@@ -622,50 +682,52 @@ fn second_pass(
     let shares = run_jobs(jobs, req, |i, path, role, overlap| {
         pass_log(&ctx, path, role, overlap, starts[i])
     })?;
-    let mut shares = shares.into_iter();
-    let Some(mut first) = shares.next() else {
-        return Ok(());
-    };
+    let mut residuals: Option<ResidualPass> = None;
     let mut t_offset = [0.0f64; 2];
-    lay_end_to_end(
-        &first,
-        &mut t_offset,
-        &mut out.fit_series,
-        &mut out.validation_series,
-    );
-    for share in shares {
-        first.residuals.merge(&share.residuals);
-        if let (Some(acc), Some(later)) = (first.candidates.as_mut(), &share.candidates) {
-            for (a, b) in acc.iter_mut().zip(later) {
-                a.merge(b).map_err(input_error)?;
-            }
+    for share in &shares {
+        match residuals.as_mut() {
+            Some(r) => r.merge(&share.residuals),
+            None => residuals = Some(share.residuals.clone()),
         }
         lay_end_to_end(
-            &share,
+            share,
             &mut t_offset,
             &mut out.fit_series,
             &mut out.validation_series,
         );
     }
-    let diagnostics = first.residuals.finish();
+    let Some(residuals) = residuals else {
+        return Ok(());
+    };
+    let diagnostics = residuals.finish();
     let inflation = coloured_variance_inflation(&diagnostics);
     out.diagnostics = Some(diagnostics);
-    if let (Some(mut options), Some(ext), Some([fit, validation])) =
-        (req.diagnose, ctx.extended, first.candidates)
-    {
-        options.variance_inflation = options.variance_inflation.max(inflation);
-        let stats = CandidateStatistics {
-            extended: &ext.structure,
-            candidates: &ext.candidates,
-            candidate_params: &ext.params,
-            base_params: req.structure.params.len(),
-            fit: &fit,
-            validation: &validation,
-        };
-        out.diagnosis = Some(
-            diagnose(&stats, &req.fit, &options).map_err(|e| PipelineError::Fit(e.to_string()))?,
-        );
+    let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
+        return Ok(());
+    };
+    let per_log: Vec<[Accumulator; 2]> = shares.into_iter().filter_map(|s| s.candidates).collect();
+    let n_fit = req.logs.len();
+    if per_log.len() != jobs.len() {
+        return Ok(());
     }
+    let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit].iter().map(|[a, b]| [a, b]).collect();
+    let (folds, fit) = arrange(req, &parts)?;
+    let mut report = Accumulator::new(&ext.structure);
+    for [_, held_out] in &per_log[n_fit..] {
+        report.merge(held_out).map_err(input_error)?;
+    }
+    options.variance_inflation = options.variance_inflation.max(inflation);
+    let stats = CandidateStatistics {
+        extended: &ext.structure,
+        candidates: &ext.candidates,
+        candidate_params: &ext.params,
+        base_params: req.structure.params.len(),
+        fit: &fit,
+        folds: &folds,
+        report: (report.count() > 0).then_some(&report),
+    };
+    out.diagnosis =
+        Some(diagnose(&stats, &req.fit, &options).map_err(|e| PipelineError::Fit(e.to_string()))?);
     Ok(())
 }
 

@@ -172,3 +172,31 @@ fn clean_sweeps_get_no_undeclared_effect() {
         assert!((pq / r - 1.0).abs() < 0.2, "seed {seed}: {pq} vs {r}");
     }
 }
+
+#[test]
+fn rotor_flapping_is_found_and_recovered() {
+    // Hub moment a Ω_i (−v_i, u_i): at Ω ~ 1000 rad/s and hub speeds of several m/s,
+    // a = 1e-6 N s²/rad is a few 0.01 N m, like the weak rotor's moment.
+    let d = run(&["flapping=1e-6"], 21);
+    let e = first_effect(&d);
+    assert_eq!(e.name, "rotor flapping moment", "{:#?}", d.effects_added);
+    let a = estimate(e, "flapping_moment");
+    assert!((a - 1e-6).abs() < 1e-7, "{a}");
+    assert_nrmse_drop(&d, 3);
+}
+
+#[test]
+fn thrust_from_rotor_acceleration_is_found_and_recovered() {
+    // Thrust k Ω̇_i per rotor: k = 2e-5 N s²/rad gives ~0.1 N at the sweep's rotor
+    // accelerations of a few 1000 rad/s².
+    let d = run(&["dynamic_inflow=2e-5"], 22);
+    let e = first_effect(&d);
+    assert_eq!(
+        e.name, "thrust from rotor acceleration",
+        "{:#?}",
+        d.effects_added
+    );
+    let k = estimate(e, "thrust_per_rotor_acceleration");
+    assert!((k - 2e-5).abs() < 2e-6, "{k}");
+    assert_nrmse_drop(&d, 3);
+}

@@ -8,7 +8,7 @@ use mrsysid::diagnose::DiagnoseOptions;
 use mrsysid::estimate::FitOptions;
 use mrsysid::io::ReadOptions;
 use mrsysid::model::{ModelOptions, ModelStructure};
-use mrsysid::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries, Validation};
+use mrsysid::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries};
 use mrsysid::vehicle::Vehicle;
 
 fn root() -> PathBuf {
@@ -43,7 +43,8 @@ fn request(logs: &[&Path], threads: usize) -> FitRequest {
         read: ReadOptions::default(),
         structure,
         fit: FitOptions::default(),
-        validation: Validation::Holdout(Holdout::default()),
+        holdout: Holdout::default(),
+        validate: Vec::new(),
         threads,
         second_pass: true,
         diagnose: Some(DiagnoseOptions::default()),

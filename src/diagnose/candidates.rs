@@ -38,8 +38,17 @@ pub enum EffectKind {
     RollPitchRateDrag,
     /// Unmeasured steady wind: the logged velocity is not the airspeed.
     SteadyWind,
-    /// Moments not tied to the forces by the vehicle file's lever arms.
-    LeverArmMismatch,
+    /// Moment axes with their own value of a lumped coefficient Eq. 22 shares with the
+    /// forces.
+    DecoupledMoments,
+    /// Rotor hub moment from blade flapping in the hub's in-plane airflow.
+    RotorFlapping,
+    /// Roll and pitch damping from each rotor's thrust change with its hub's vertical
+    /// velocity, with its own coefficient.
+    RotorRateDamping,
+    /// Thrust responding to rotor acceleration (dynamic inflow, or a rotor speed logged
+    /// through a lag).
+    RotorAccelerationThrust,
     /// Constant accelerometer bias in forces derived as m a.
     AccelerometerBias,
     /// Residual structure with no physical name (the generic pool).
@@ -54,6 +63,14 @@ impl EffectKind {
             self,
             Self::YawRateDrag | Self::RollPitchRateDrag | Self::LinearVh | Self::CgHeight
         )
+    }
+
+    /// True for hypotheses that name no mechanism: generic-pool terms, and moment
+    /// coefficients freed from the forces (a catch-all that would mask any moment
+    /// physics that follows an Eq. 22 term). A named mechanism is preferred over them
+    /// when it explains about as much.
+    pub fn is_unspecific(self) -> bool {
+        matches!(self, Self::Generic | Self::DecoupledMoments)
     }
 }
 
@@ -352,8 +369,11 @@ pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
     if ctx.vehicle.props.hub_height != 0.0 {
         out.push(roll_pitch_rate_drag(ctx));
     }
-    if let Some(c) = lever_arm_mismatch(ctx) {
-        out.push(c);
+    out.extend(decoupled_moments(ctx));
+    out.push(rotor_flapping(ctx));
+    out.push(rotor_rate_damping());
+    if ctx.has_omega_dot {
+        out.push(rotor_acceleration_thrust(ctx));
     }
     out.push(accelerometer_bias(ctx));
     out
@@ -583,7 +603,7 @@ fn delay(ctx: &CandidateContext) -> Candidate {
     Candidate {
         kind: EffectKind::RotorSpeedDelay,
         name: "rotor-speed delay".into(),
-        physics: "When logged rotor speeds lag the true ones by tau (filtering, telemetry), the loads lead the log: dF = tau dF/dOmega dOmega/dt.",
+        physics: "When logged rotor speeds lag the true ones by tau (a pure delay, or a first-order filter of time constant tau: the two agree to first order in tau), the loads lead the log: dF = tau dF/dOmega dOmega/dt.",
         parameters: vec![parameter(
             "rotor_speed_delay",
             "s",
@@ -682,48 +702,147 @@ fn roll_pitch_rate_drag(ctx: &CandidateContext) -> Candidate {
     }
 }
 
-/// The leading thrust and H-force coefficients: their moment columns carry the rotor
-/// positions (arm length) and the hub height.
-const LEVER_ARM_COEFFICIENTS: [&str; 2] = ["C_T0", "C_H_mub"];
-
 /// Eq. 22 shares each lumped coefficient between the forces and the moments, the
 /// moments' columns carrying the vehicle file's rotor positions and hub height. Wrong
-/// lever arms (or effective thrust and drag centres away from the hubs) break that tie:
-/// the moments need the coefficient times the ratio of true to assumed lever arm. The
-/// candidate gives the leading thrust and H-force coefficients a second value on the
-/// moment axes (the estimate is the moment value minus the force value).
-fn lever_arm_mismatch(ctx: &CandidateContext) -> Option<Candidate> {
+/// lever arms, effective thrust and drag centres away from the hubs, or moment physics
+/// the model lacks that correlates with a term (hub moments, flapping) break that tie.
+/// One candidate per coefficient that acts on both and per moment axis: it gives that
+/// axis a second value of the coefficient (the estimate is the moment value minus the
+/// force value, so its t-statistic tests the tie).
+fn decoupled_moments(ctx: &CandidateContext) -> Vec<Candidate> {
     let s = ctx.structure;
     let is_moment = |a: Axis| (a as usize) >= 3;
-    let parameters: Vec<CandidateParameter> = (0..s.params.len())
-        .filter(|&p| LEVER_ARM_COEFFICIENTS.contains(&s.params[p].name.as_str()))
-        .filter(|&p| {
-            let axes = || {
-                s.columns
-                    .iter()
-                    .filter(move |c| c.param == p)
-                    .map(|c| c.axis)
-            };
-            axes().any(is_moment) && axes().any(|a| !is_moment(a))
-        })
-        .map(|p| {
-            let cols = s
-                .columns
+    let mut out = Vec::new();
+    for p in 0..s.params.len() {
+        let columns: Vec<&Column> = s.columns.iter().filter(|c| c.param == p).collect();
+        if !columns.iter().any(|c| !is_moment(c.axis)) {
+            continue;
+        }
+        let name = &s.params[p].name;
+        for axis in [Axis::Mx, Axis::My, Axis::Mz] {
+            let cols: Vec<Column> = columns
                 .iter()
-                .filter(|c| c.param == p && is_moment(c.axis))
-                .cloned()
+                .filter(|c| c.axis == axis)
+                .map(|&c| c.clone())
                 .collect();
-            parameter(
-                &format!("{}_moments", s.params[p].name),
-                &s.params[p].unit,
-                cols,
-            )
-        })
-        .collect();
-    (!parameters.is_empty()).then(|| Candidate {
-        kind: EffectKind::LeverArmMismatch,
-        name: "lever-arm mismatch".into(),
-        physics: "Eq. 22 ties the moments to the forces through the vehicle file's rotor positions and hub height; if the true lever arms (or the rotors' effective thrust and drag centres) differ, the moment coefficients differ from the force ones by the ratio of the arms.",
-        parameters,
-    })
+            if cols.is_empty() {
+                continue;
+            }
+            out.push(Candidate {
+                kind: EffectKind::DecoupledMoments,
+                name: format!("decoupled {name} on {axis}"),
+                physics: "Eq. 22 ties this coefficient's moment terms to its force terms through the vehicle file's lever arms; wrong arms, thrust and drag centres away from the hubs, or moment physics the model lacks that follows the same term give the moment a value of its own.",
+                parameters: vec![parameter(
+                    &format!("{name}@{}", axis.name()),
+                    &s.params[p].unit,
+                    cols,
+                )],
+            });
+        }
+    }
+    out
+}
+
+/// In-plane velocity (u_i, v_i) of hub `i` at (x_i, y_i, −h) from body velocity and
+/// rates (Eq. 18 with the hub height): u_i = u − q h − r y_i, v_i = v + p h + r x_i; as
+/// (coefficient, factors) pairs of each component.
+fn hub_in_plane_velocity(ctx: &CandidateContext, i: usize) -> [Vec<(f64, Signal)>; 2] {
+    use Signal::*;
+    let rotor = ctx.vehicle.rotors()[i];
+    let h = ctx.vehicle.props.hub_height;
+    [
+        vec![(1.0, U), (-h, Q), (-rotor.y, R)],
+        vec![(1.0, V), (h, P), (rotor.x, R)],
+    ]
+}
+
+/// Blade flapping: each rotor's disc tilts away from the in-plane airflow at its hub by
+/// an angle ∝ μ_i = V_i/(Ω_i R), so its thrust (∝ Ω_i²) gains an in-plane component, and
+/// a hingeless hub a moment, ∝ Ω_i V_i. Acting above the CG both give M_x = −a Σ Ω_i v_i
+/// and M_y = a Σ Ω_i u_i, the same sign for either spin direction. (The spin-weighted
+/// lateral part, Σ σ_i Ω_i u_i on M_x, is Eq. 22's moment-only C_R_mub term.)
+fn rotor_flapping(ctx: &CandidateContext) -> Candidate {
+    let n = ctx.vehicle.rotor_count();
+    let axis_terms = |component: usize, sign: f64| -> Vec<Term> {
+        (0..n)
+            .flat_map(|i| {
+                let (w, _, _) = rotor_signals(i);
+                hub_in_plane_velocity(ctx, i)[component]
+                    .clone()
+                    .into_iter()
+                    .filter(|(c, _)| *c != 0.0)
+                    .map(move |(c, s)| term(sign * c, &[s, w]))
+            })
+            .collect()
+    };
+    Candidate {
+        kind: EffectKind::RotorFlapping,
+        name: "rotor flapping moment".into(),
+        physics: "Each rotor's disc flaps back from the in-plane airflow at its hub (angle proportional to the advance ratio), tilting its thrust and loading a stiff hub: a rolling moment against the hub's sideways speed and a pitching moment against its forward speed, proportional to rotor speed times hub speed.",
+        parameters: vec![parameter(
+            "flapping_moment",
+            "N s^2/rad",
+            vec![
+                column(Axis::Mx, "-Sum Omega_i v_i", axis_terms(1, -1.0)),
+                column(Axis::My, "Sum Omega_i u_i", axis_terms(0, 1.0)),
+            ],
+        )],
+    }
+}
+
+/// Roll and pitch damping with a coefficient of its own: rotor i's thrust changes by
+/// c Ω_i w_i with its hub's vertical velocity w_i = p y_i − q x_i (Eq. 18), so
+/// M_x = −c (p Σ y_i² Ω_i − q Σ x_i y_i Ω_i), M_y = −c (q Σ x_i² Ω_i − p Σ x_i y_i Ω_i).
+/// Eq. 22 has these terms only inside the C_T_muw column, tied to w δa and to F_z.
+fn rotor_rate_damping() -> Candidate {
+    use Signal::*;
+    Candidate {
+        kind: EffectKind::RotorRateDamping,
+        name: "rotor rate damping".into(),
+        physics: "Rolling and pitching move each hub up or down (w_i = p y_i - q x_i), changing its rotor's angle of attack and thrust in proportion to rotor speed: a damping moment, here with its own coefficient instead of the one Eq. 22 shares with the vertical force.",
+        parameters: vec![parameter(
+            "rate_damping",
+            "N s^2/(rad m)",
+            vec![
+                column(
+                    Axis::Mx,
+                    "-(p*SumY2Omega - q*SumXYOmega)",
+                    vec![term(-1.0, &[P, SumY2Omega]), term(1.0, &[Q, SumXYOmega])],
+                ),
+                column(
+                    Axis::My,
+                    "-(q*SumX2Omega - p*SumXYOmega)",
+                    vec![term(-1.0, &[Q, SumX2Omega]), term(1.0, &[P, SumXYOmega])],
+                ),
+            ],
+        )],
+    }
+}
+
+/// Thrust responding to rotor acceleration: ΔT_i = c Ω̇_i (the induced flow lags a
+/// change of rotor speed, or the logged speed lags the true one through a first-order
+/// filter), so F_z = −c Σ Ω̇_i, M_x = −c Σ y_i Ω̇_i, M_y = c Σ x_i Ω̇_i.
+fn rotor_acceleration_thrust(ctx: &CandidateContext) -> Candidate {
+    let n = ctx.vehicle.rotor_count();
+    let rotors = ctx.vehicle.rotors();
+    let axis_terms = |weight: &dyn Fn(usize) -> f64| -> Vec<Term> {
+        (0..n)
+            .filter(|&i| weight(i) != 0.0)
+            .map(|i| term(weight(i), &[rotor_signals(i).2]))
+            .collect()
+    };
+    Candidate {
+        kind: EffectKind::RotorAccelerationThrust,
+        name: "thrust from rotor acceleration".into(),
+        physics: "When a rotor speeds up, its thrust changes in proportion to the rotor acceleration as well as the speed: the induced flow takes time to build (dynamic inflow), or the logged speed lags the true one through a filter.",
+        parameters: vec![parameter(
+            "thrust_per_rotor_acceleration",
+            "N s^2/rad",
+            vec![
+                column(Axis::Fz, "-Sum dOmega_i", axis_terms(&|_| -1.0)),
+                column(Axis::Mx, "-Sum y_i dOmega_i", axis_terms(&|i| -rotors[i].y)),
+                column(Axis::My, "Sum x_i dOmega_i", axis_terms(&|i| rotors[i].x)),
+            ],
+        )],
+    }
 }

@@ -1,8 +1,12 @@
 //! The generic pool: residual structure that no named effect explains.
 //!
 //! The pool holds every monomial of degree 0 to 3 in the body velocities u, v, w, the
-//! rates p, q, r and the virtual actuators δt, δa, δe, δr (Eq. 21): 286 monomials per
-//! axis, 1716 hypotheses in all. Accumulating them all next to the named candidates would
+//! rates p, q, r and the virtual actuators δt, δa, δe, δr (Eq. 21), and the rotor-local
+//! products s · Σ_i w_i Ω_i² and s · Σ_i w_i Ω̇_i, s ∈ {1, u, v, w, p, q, r} and w_i a row of
+//! the mixing matrix (Eq. 20: 1/N, −y_i, x_i, −σ_i; Ω̇ only when the data has it): 286 +
+//! 56 = 342 monomials per axis, 2052 hypotheses in all. (Σ_i w_i s Ω_i is s times a
+//! virtual actuator, already in the first part.) Accumulating them all next to the named
+//! candidates would
 //! multiply the cost of the streaming statistics by ~50, so the pool is *screened* on a
 //! decimated sample of the fit data held in memory:
 //!
@@ -41,6 +45,18 @@ const VARIABLES: [(Signal, &str); 10] = [
     (Signal::Dr, "dr"),
 ];
 
+/// Rotor-local sums: δ² (Eq. 19, Σ w_i Ω_i²) and δ̇ (Σ w_i Ω̇_i) of each mixing row.
+const ROTOR_SUMS: [(Signal, &str); 8] = [
+    (Signal::D2t, "d2t"),
+    (Signal::D2a, "d2a"),
+    (Signal::D2e, "d2e"),
+    (Signal::D2r, "d2r"),
+    (Signal::ActuatorRate(0), "dt_dot"),
+    (Signal::ActuatorRate(1), "da_dot"),
+    (Signal::ActuatorRate(2), "de_dot"),
+    (Signal::ActuatorRate(3), "dr_dot"),
+];
+
 /// Samples of the fit data the pipeline keeps in memory for screening (~4 MB for a quad).
 pub const SCREENING_SAMPLES: usize = 20_000;
 
@@ -68,11 +84,12 @@ impl Default for ScreeningOptions {
     }
 }
 
-/// Exponents of every monomial of degree ≤ [`MAX_DEGREE`] (as variable index lists,
-/// non-decreasing), the constant first.
-pub fn monomials() -> Vec<Vec<usize>> {
+/// Every monomial of the pool as its factors: the polynomial part (degree ≤
+/// [`MAX_DEGREE`], variables in non-decreasing order, the constant first), then the
+/// rotor-local products.
+pub fn monomials() -> Vec<Vec<Signal>> {
     let mut out = vec![Vec::new()];
-    let mut frontier = vec![Vec::new()];
+    let mut frontier: Vec<Vec<usize>> = vec![Vec::new()];
     for _ in 0..MAX_DEGREE {
         let mut next = Vec::new();
         for m in &frontier {
@@ -83,8 +100,15 @@ pub fn monomials() -> Vec<Vec<usize>> {
                 next.push(n);
             }
         }
-        out.extend(next.iter().cloned());
+        out.extend(
+            next.iter()
+                .map(|m| m.iter().map(|&v| VARIABLES[v].0).collect()),
+        );
         frontier = next;
+    }
+    for (sum, _) in ROTOR_SUMS {
+        out.push(vec![sum]);
+        out.extend(VARIABLES[..6].iter().map(|&(s, _)| vec![s, sum]));
     }
     out
 }
@@ -94,12 +118,18 @@ pub fn pool_size() -> usize {
     monomials().len() * Axis::ALL.len()
 }
 
-fn label(m: &[usize]) -> String {
+fn label(m: &[Signal]) -> String {
     if m.is_empty() {
         return "1".into();
     }
     m.iter()
-        .map(|&v| VARIABLES[v].1)
+        .map(|s| {
+            VARIABLES
+                .iter()
+                .chain(&ROTOR_SUMS)
+                .find(|(v, _)| v == s)
+                .map_or("?", |(_, name)| name)
+        })
         .collect::<Vec<_>>()
         .join("*")
 }
@@ -107,17 +137,16 @@ fn label(m: &[usize]) -> String {
 /// Monomial values on `data`: column j of the returned workspace is monomial j.
 fn evaluate(
     like: &ModelStructure,
-    pool: &[Vec<usize>],
+    pool: &[Vec<Signal>],
     data: &SampleChunk,
 ) -> Result<Workspace, ModelError> {
     let (mut s, _) = like.subset(&[]);
     for m in pool {
-        let factors: Vec<Signal> = m.iter().map(|&v| VARIABLES[v].0).collect();
         let column = Column {
             axis: Axis::Fx,
             param: 0,
             label: label(m),
-            terms: vec![term(1.0, &factors)],
+            terms: vec![term(1.0, m)],
         };
         let name = format!("m{}", s.params.len());
         s.add_parameter(
@@ -206,7 +235,11 @@ pub fn screen(
     options: &ScreeningOptions,
 ) -> Result<Vec<Screened>, ModelError> {
     let n = data.len();
-    let pool = monomials();
+    let needs_omega_dot = |m: &Vec<Signal>| m.iter().any(|s| matches!(s, Signal::ActuatorRate(_)));
+    let pool: Vec<Vec<Signal>> = monomials()
+        .into_iter()
+        .filter(|m| data.has_omega_dot() || !needs_omega_dot(m))
+        .collect();
     let mut ws = Workspace::default();
     extended.assemble(data, &mut ws)?;
     let values = evaluate(extended, &pool, data)?;
@@ -246,7 +279,7 @@ pub fn screen(
                 drop,
                 p,
                 rms: (dot(g, g) / n as f64).sqrt(),
-                factors: pool[j].iter().map(|&v| VARIABLES[v].0).collect(),
+                factors: pool[j].clone(),
             });
             basis.add(g);
             r = basis.residual(&r);
@@ -268,7 +301,7 @@ impl Screened {
         Candidate {
             kind: EffectKind::Generic,
             name: name.clone(),
-            physics: "Residual structure no named effect explains: a product of states and virtual actuators, estimated as the load at one RMS of the product.",
+            physics: "Residual structure no named effect explains: a product of states, virtual actuators and rotor-local sums, estimated as the load at one RMS of the product.",
             parameters: vec![CandidateParameter {
                 name: format!("g_{}_{}", self.axis, self.label.replace('*', "_")),
                 unit: self.axis.unit().to_string(),
@@ -369,14 +402,15 @@ mod tests {
 
     #[test]
     fn pool_counts_every_monomial_of_degree_three_or_less() {
-        // C(10 + 3, 3) = 286 monomials of degree ≤ 3 in 10 variables.
+        // C(10 + 3, 3) = 286 monomials of degree ≤ 3 in 10 variables, then 8 rotor-local
+        // sums alone and times each of the 6 states.
         let m = monomials();
-        assert_eq!(m.len(), 286);
-        assert_eq!(pool_size(), 1716);
+        assert_eq!(m.len(), 286 + 8 * 7);
+        assert_eq!(pool_size(), 6 * 342);
         let mut sorted = m.clone();
         sorted.sort();
         sorted.dedup();
-        assert_eq!(sorted.len(), 286, "no monomial twice");
+        assert_eq!(sorted.len(), 342, "no monomial twice");
     }
 
     fn ramp(n: usize, offset: usize) -> SampleChunk {

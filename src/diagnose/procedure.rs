@@ -1,36 +1,56 @@
 //! The closing-the-loop procedure: score every candidate effect on the residual of the
-//! current model, add the best one that is significant, plausible and pays on
-//! validation data, refit, repeat.
+//! current model, add the best one that is significant, plausible and pays on data the
+//! model was not fitted on, refit, repeat; then leave out every term, of Eq. 22 or added,
+//! that the held-out data do not support.
 //!
 //! All candidates' columns are accumulated once, next to the base columns, for the fit
-//! and the validation data; every trial model is then a column subset of those
-//! statistics ([`Accumulator::select`]), so no trial re-reads the data.
+//! data and for each cross-validation fold ([`Folds`]: leave one log out with two or
+//! more logs, the segment hold-out of a single log); every trial model is then a column
+//! subset of those statistics ([`Accumulator::select`]), so no trial re-reads the data.
+//! Every decision is made on the folds; data given only for reporting
+//! ([`CandidateStatistics::report`], `--validate` logs) are evaluated at the end and
+//! never steer a choice, so their figures stay unbiased.
 //!
 //! A candidate is accepted when
 //! 1. its MMR estimates are significant: the smallest P-value of its parameters is below
 //!    α / (number of named candidates scored in the step) (Bonferroni);
 //! 2. it is plausible: every estimate lies in the physical range of its parameter;
-//! 3. it pays on validation data: on some axis validation NRMSE falls by at least
-//!    [`DiagnoseOptions::min_gain`] (relative), so does the sum over all axes, and no
-//!    axis gets worse by more than [`DiagnoseOptions::max_loss`]. All axes count: the
-//!    MMR couples them through shared parameters, so a candidate can pay on an axis it
-//!    has no column on.
+//! 3. it pays on held-out data: on some axis the cross-validated NRMSE (the mean over
+//!    folds, so each log counts alike) falls by at least [`DiagnoseOptions::min_gain`]
+//!    (relative), so does the sum over all axes,
+//!    and no axis gets worse by more than [`DiagnoseOptions::max_loss`]. All axes count:
+//!    the MMR couples them through shared parameters, so a candidate can pay on an axis
+//!    it has no column on.
 //!
 //! Among accepted candidates, completions of the Eq. 22 structure (terms its own
 //! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
 //! effects; within each group the largest validation gain summed over the axes wins.
 //! Terms of the
 //! generic pool ([`super::generic`]: residual structure with no name, whose Bonferroni
-//! divisor is the whole pool it was screened from) compete with named effects, but a
-//! named effect's gain counts 1 + [`DiagnoseOptions::look_alike`] times: named effects
-//! are preferred when they explain about as much. Candidates of other kinds in the same
+//! divisor is the whole pool it was screened from) and moment coefficients freed from
+//! the forces ([`EffectKind::is_unspecific`]) compete with named mechanisms, but a named
+//! mechanism's gain counts 1 + [`DiagnoseOptions::look_alike`] times: it is preferred
+//! when it explains about as much. Candidates of other kinds in the same
 //! group whose gain is within [`DiagnoseOptions::look_alike`] of the winner's are
 //! reported as look-alikes the data cannot tell apart.
+//!
+//! **Parsimony.** After the last addition, terms (a parameter's columns on one axis: a
+//! row of the FSOA table, or a candidate's columns there) are left out one at a time,
+//! the one whose removal costs least first, while the model stays within noise of the best
+//! cross-validated score seen: with σ̂²_ja the held-out mean square error of the model
+//! after the last addition on fold j and axis a, the score is Σ_j Σₐ SSE_ja/σ̂²_ja and a
+//! removal is within noise when it
+//! raises the score by at most κ χ²₁(1 − α) above the best, κ the coloured-residual
+//! variance inflation ([`DiagnoseOptions::variance_inflation`]): a likelihood-ratio test
+//! of one term on held-out residuals. Left-out terms are reported as "not supported by
+//! these data". Control-effectiveness terms
+//! ([`ModelStructure::is_control_effectiveness`]) are never left out.
 
 use serde::Serialize;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use super::candidates::{Candidate, EffectKind};
-use crate::estimate::{self, AxisMetrics, FitOptions};
+use crate::estimate::{self, AxisMetrics, CrossValidation, FitOptions, Folds};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
 use crate::stats::Accumulator;
@@ -114,6 +134,17 @@ pub struct DiagnosisStep {
     pub look_alikes: Vec<String>,
 }
 
+/// A term (a parameter's columns on one axis) left out of the final model because
+/// held-out data do not support it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Unsupported {
+    /// The term, `parameter on axis`.
+    pub name: String,
+    /// Rise of the cross-validation score Σ_j Σₐ SSE_ja/σ̂²_ja when it is left out, relative to
+    /// the best model (negative: the model predicts better without it).
+    pub score_change: f64,
+}
+
 /// Result of the procedure.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnosis {
@@ -121,10 +152,21 @@ pub struct Diagnosis {
     pub steps: Vec<DiagnosisStep>,
     /// Effects added, in order.
     pub effects_added: Vec<CandidateScore>,
-    /// Validation metrics of the base model.
+    /// Terms left out of the final model (of Eq. 22 or added), in order.
+    pub unsupported: Vec<Unsupported>,
+    /// Names of the cross-validation folds' test data (logs left out, or the hold-out).
+    pub folds: Vec<String>,
+    /// Cross-validated metrics of the base model, all folds pooled.
     pub before: [AxisMetrics; 6],
-    /// Validation metrics of the final model.
+    /// Cross-validated metrics of the final model, all folds pooled.
     pub after: [AxisMetrics; 6],
+    /// Per fold, the base model's metrics.
+    pub before_folds: Vec<[AxisMetrics; 6]>,
+    /// Per fold, the final model's metrics.
+    pub after_folds: Vec<[AxisMetrics; 6]>,
+    /// Base and final model (each fitted on all fit data) on the reporting-only
+    /// validation data, when given: no decision saw these data.
+    pub validation: Option<[[AxisMetrics; 6]; 2]>,
     /// θ̂ of the final model over `structure.params`.
     pub theta: Vec<f64>,
     /// Standard deviations of `theta` (0 for parameters dropped as unidentifiable).
@@ -152,10 +194,12 @@ pub struct CandidateStatistics<'a> {
     pub candidate_params: &'a [Vec<usize>],
     /// Number of base parameters (the first ones of `extended`).
     pub base_params: usize,
-    /// Fit-data statistics over `extended`.
+    /// Statistics of all fit data over `extended` (the estimates).
     pub fit: &'a Accumulator,
-    /// Validation-data statistics over `extended`.
-    pub validation: &'a Accumulator,
+    /// Cross-validation folds of the fit data over `extended` (every decision).
+    pub folds: &'a Folds,
+    /// Reporting-only validation statistics over `extended` (no decision uses them).
+    pub report: Option<&'a Accumulator>,
 }
 
 /// Physical range of a candidate parameter (by name prefix).
@@ -178,35 +222,42 @@ fn plausible(name: &str, value: f64) -> bool {
     }
 }
 
-/// Sub-model of `stats.extended` with the base parameters plus `params`: the structure
-/// and the column indices into `extended`.
-fn submodel(stats: &CandidateStatistics, params: &[usize]) -> (ModelStructure, Vec<usize>) {
-    let mut keep: Vec<usize> = (0..stats.base_params).collect();
-    keep.extend_from_slice(params);
-    stats.extended.subset(&keep)
+impl CandidateStatistics<'_> {
+    /// Indices of the columns of `extended` whose parameter satisfies `keep`, ascending.
+    fn columns_of(&self, keep: impl Fn(usize) -> bool) -> Vec<usize> {
+        (0..self.extended.columns.len())
+            .filter(|&j| keep(self.extended.columns[j].param))
+            .collect()
+    }
 }
 
-/// Fit of a sub-model: (θ over its params, std, P-values, validation metrics).
+/// Fit of a sub-model of `stats.extended`: θ, σ and P over its params, its
+/// cross-validation, and the structure.
+#[derive(Clone)]
 struct Trial {
     theta: Vec<f64>,
     std: Vec<f64>,
     p: Vec<f64>,
-    validation: [AxisMetrics; 6],
+    cv: CrossValidation,
     structure: ModelStructure,
+    /// Column indices into `stats.extended`.
+    columns: Vec<usize>,
 }
 
+/// Fits the sub-model of `stats.extended` with columns `columns` (indices into
+/// `extended.columns`, ascending) on all fit data and on every fold.
 fn trial(
     stats: &CandidateStatistics,
-    params: &[usize],
+    columns: &[usize],
     options: &FitOptions,
     inflation: f64,
 ) -> Result<Trial, String> {
-    let (structure, cols) = submodel(stats, params);
-    let fit_acc = stats.fit.select(&cols);
-    let val_acc = stats.validation.select(&cols);
-    let fit = estimate::fit(&structure, &fit_acc, options).map_err(|e| e.to_string())?;
-    let validation =
-        estimate::evaluate(&structure, &fit.mmr.theta, &val_acc).map_err(|e| e.to_string())?;
+    let (structure, _) = stats.extended.select_columns(columns);
+    let columns = columns.to_vec();
+    let fit = estimate::fit(&structure, &stats.fit.select(&columns), options)
+        .map_err(|e| e.to_string())?;
+    let cv = estimate::cross_validate(&structure, &stats.folds.select(&columns), options)
+        .map_err(|e| e.to_string())?;
     let mut std = vec![0.0; structure.params.len()];
     let mut p = vec![1.0; structure.params.len()];
     let inflation = inflation.max(1.0).sqrt();
@@ -218,16 +269,20 @@ fn trial(
         theta: fit.mmr.theta.clone(),
         std,
         p,
-        validation,
+        cv,
         structure,
+        columns,
     })
 }
 
-fn gains(before: &[AxisMetrics; 6], after: &[AxisMetrics; 6]) -> [f64; 6] {
-    std::array::from_fn(|a| {
-        let b = before[a].nrmse;
-        if b > 0.0 {
-            (b - after[a].nrmse) / b
+/// Relative reduction per axis of the cross-validated NRMSE, each fold weighted alike
+/// ([`CrossValidation::balanced_nrmse`]): a term must predict every log better on
+/// average, not only the one with the largest loads.
+fn gains(before: &CrossValidation, after: &CrossValidation) -> [f64; 6] {
+    let (b, a) = (before.balanced_nrmse(), after.balanced_nrmse());
+    std::array::from_fn(|k| {
+        if b[k] > 0.0 {
+            (b[k] - a[k]) / b[k]
         } else {
             0.0
         }
@@ -240,118 +295,229 @@ pub fn diagnose(
     fit_options: &FitOptions,
     options: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
+    let inflation = options.variance_inflation;
+    let mut kept: Vec<usize> = stats.columns_of(|p| p < stats.base_params);
+    let base = trial(stats, &kept, fit_options, inflation).map_err(DiagnoseError::Fit)?;
+    let mut current = base.clone();
     let mut added: Vec<usize> = Vec::new();
-    let mut current =
-        trial(stats, &[], fit_options, options.variance_inflation).map_err(DiagnoseError::Fit)?;
-    let before = current.validation;
     let mut steps = Vec::new();
     let mut effects_added = Vec::new();
     while added.len() < options.max_effects {
-        let remaining: Vec<usize> = (0..stats.candidates.len())
-            .filter(|c| !added.contains(c))
-            .collect();
-        // Bonferroni: named candidates over those still in play; generic ones over the
-        // whole pool they were screened from.
-        let named = remaining
-            .iter()
-            .filter(|&&c| stats.candidates[c].kind != EffectKind::Generic)
-            .count();
-        let level = |c: usize| match stats.candidates[c].kind {
-            EffectKind::Generic => options.alpha / super::generic::pool_size() as f64,
-            _ => options.alpha / named.max(1) as f64,
+        let Some(step) = forward_step(stats, &kept, &added, &current, fit_options, options) else {
+            break;
         };
-        let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> = remaining
-            .iter()
-            .map(|&c| score(stats, &added, c, &current, fit_options, options, level(c)))
-            .collect();
-        // Accepted first; among them completions of the Eq. 22 structure before
-        // undeclared effects (so an effect is judged against a model that already has
-        // the terms its own assumptions drop), and named effects before generic terms;
-        // then by validation gain.
-        let look_alike = options.look_alike;
-        scored.sort_by(|a, b| {
-            let key = |s: &CandidateScore| {
-                let ok = s.rejected.is_empty();
-                (ok, ok && s.kind.is_model_completion())
-            };
-            key(&a.0)
-                .cmp(&key(&b.0))
-                .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
-                .reverse()
-        });
-        let best_ok = scored
-            .first()
-            .filter(|s| s.0.rejected.is_empty())
-            .map(|s| s.0.clone());
-        let look_alikes = best_ok
-            .as_ref()
-            .map(|best| {
-                scored[1..]
-                    .iter()
-                    .filter(|s| {
-                        s.0.rejected.is_empty()
-                            && s.0.kind != best.kind
-                            && s.0.kind.is_model_completion() == best.kind.is_model_completion()
-                            && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
-                    })
-                    .map(|s| s.0.name.clone())
-                    .collect()
-            })
-            .unwrap_or_default();
-        let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
-        let mut winner = None;
-        for (i, (s, c, t)) in scored.into_iter().enumerate() {
-            if i == 0 && s.rejected.is_empty() {
-                winner = Some((c, t.expect("accepted trials exist")));
-            }
-            ranking.push(s);
-        }
-        match winner {
-            Some((c, t)) => {
-                added.push(c);
-                current = t;
-                effects_added.push(ranking[0].clone());
-                steps.push(DiagnosisStep {
-                    ranking,
-                    added: Some(0),
-                    look_alikes,
-                });
-            }
-            None => {
-                steps.push(DiagnosisStep {
-                    ranking,
-                    added: None,
-                    look_alikes,
-                });
-                break;
-            }
-        }
+        let (step, winner) = step;
+        steps.push(step);
+        let Some((c, t)) = winner else {
+            break;
+        };
+        added.push(c);
+        kept = t.columns.clone();
+        current = t;
+        let last = steps.last().expect("pushed");
+        effects_added.push(last.ranking[0].clone());
     }
+    let unsupported = prune(stats, &mut kept, &mut current, fit_options, options);
+    let validation = stats
+        .report
+        .map(|r| -> Result<_, DiagnoseError> {
+            let on_report = |t: &Trial| {
+                estimate::evaluate(&t.structure, &t.theta, &r.select(&t.columns))
+                    .map_err(|e| DiagnoseError::Fit(e.to_string()))
+            };
+            Ok([on_report(&base)?, on_report(&current)?])
+        })
+        .transpose()?;
+    let fold_metrics =
+        |cv: &CrossValidation| (0..cv.folds.len()).map(|j| cv.fold_metrics(j)).collect();
     Ok(Diagnosis {
         steps,
         effects_added,
-        before,
-        after: current.validation,
+        unsupported,
+        folds: stats.folds.names.clone(),
+        before: base.cv.pooled_metrics(),
+        after: current.cv.pooled_metrics(),
+        before_folds: fold_metrics(&base.cv),
+        after_folds: fold_metrics(&current.cv),
+        validation,
         theta: current.theta,
         std: current.std,
         structure: current.structure,
     })
 }
 
-/// Validation gain used to rank accepted candidates of one group: a named effect's gain
-/// counts `1 + look_alike` times, so it is preferred over a generic term that explains
-/// about as much, but not over one that explains clearly more.
+/// One forward step: every remaining candidate scored against the current model
+/// (parameters `kept`), ranked; the winner (candidate index and its trial) when one is
+/// acceptable. `None` when no candidate remains.
+fn forward_step(
+    stats: &CandidateStatistics,
+    kept: &[usize],
+    added: &[usize],
+    current: &Trial,
+    fit_options: &FitOptions,
+    options: &DiagnoseOptions,
+) -> Option<(DiagnosisStep, Option<(usize, Trial)>)> {
+    let remaining: Vec<usize> = (0..stats.candidates.len())
+        .filter(|c| !added.contains(c))
+        .collect();
+    if remaining.is_empty() {
+        return None;
+    }
+    // Bonferroni: named candidates over those still in play; generic ones over the
+    // whole pool they were screened from.
+    let named = remaining
+        .iter()
+        .filter(|&&c| stats.candidates[c].kind != EffectKind::Generic)
+        .count();
+    let level = |c: usize| match stats.candidates[c].kind {
+        EffectKind::Generic => options.alpha / super::generic::pool_size() as f64,
+        _ => options.alpha / named.max(1) as f64,
+    };
+    let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> = remaining
+        .iter()
+        .map(|&c| score(stats, kept, c, current, fit_options, options, level(c)))
+        .collect();
+    // Accepted first; among them completions of the Eq. 22 structure before
+    // undeclared effects (so an effect is judged against a model that already has
+    // the terms its own assumptions drop), and named effects before generic terms;
+    // then by validation gain.
+    let look_alike = options.look_alike;
+    scored.sort_by(|a, b| {
+        let key = |s: &CandidateScore| {
+            let ok = s.rejected.is_empty();
+            (ok, ok && s.kind.is_model_completion())
+        };
+        key(&a.0)
+            .cmp(&key(&b.0))
+            .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
+            .reverse()
+    });
+    let best_ok = scored
+        .first()
+        .filter(|s| s.0.rejected.is_empty())
+        .map(|s| s.0.clone());
+    let look_alikes = best_ok
+        .as_ref()
+        .map(|best| {
+            scored[1..]
+                .iter()
+                .filter(|s| {
+                    s.0.rejected.is_empty()
+                        && s.0.kind != best.kind
+                        && s.0.kind.is_model_completion() == best.kind.is_model_completion()
+                        && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
+                })
+                .map(|s| s.0.name.clone())
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
+    let mut winner = None;
+    for (i, (s, c, t)) in scored.into_iter().enumerate() {
+        if i == 0 && s.rejected.is_empty() {
+            winner = t.map(|t| (c, t));
+        }
+        ranking.push(s);
+    }
+    let step = DiagnosisStep {
+        ranking,
+        added: winner.as_ref().map(|_| 0),
+        look_alikes,
+    };
+    Some((step, winner))
+}
+
+/// Cross-validation score Σ_j Σₐ SSE_ja/σ̂²_ja of `cv`: each fold j's held-out errors on
+/// axis a in units of the reference model's mean square error there (`scale`).
+fn cv_score(cv: &CrossValidation, scale: &[[f64; 6]]) -> f64 {
+    cv.folds
+        .iter()
+        .zip(scale)
+        .flat_map(|(f, v)| f.iter().zip(v).map(|(s, v)| s.sse / v))
+        .sum()
+}
+
+/// Leaves out terms (a parameter's columns on one axis) of the model with columns `kept`
+/// one at a time while it stays within noise of the best cross-validated score (module
+/// docs); returns them in order.
+fn prune(
+    stats: &CandidateStatistics,
+    kept: &mut Vec<usize>,
+    current: &mut Trial,
+    fit_options: &FitOptions,
+    options: &DiagnoseOptions,
+) -> Vec<Unsupported> {
+    let scale: Vec<[f64; 6]> = current
+        .cv
+        .folds
+        .iter()
+        .map(|f| f.map(|s| (s.sse / s.n).max(f64::MIN_POSITIVE)))
+        .collect();
+    let Ok(chi2) = ChiSquared::new(1.0) else {
+        return Vec::new();
+    };
+    let noise = options.variance_inflation.max(1.0) * chi2.inverse_cdf(1.0 - options.alpha);
+    let mut best = cv_score(&current.cv, &scale);
+    let mut out = Vec::new();
+    loop {
+        let column = |j: usize| &stats.extended.columns[j];
+        // Control-effectiveness terms stay: a model without them is no use for control
+        // design, whatever their share of the held-out variance.
+        let mut terms: Vec<(usize, Axis)> = kept
+            .iter()
+            .filter(|&&j| !stats.extended.is_control_effectiveness(j))
+            .map(|&j| (column(j).param, column(j).axis))
+            .collect();
+        terms.sort_unstable();
+        terms.dedup();
+        if terms.is_empty() {
+            break;
+        }
+        let cheapest = terms
+            .iter()
+            .filter_map(|&term| {
+                let without: Vec<usize> = kept
+                    .iter()
+                    .copied()
+                    .filter(|&j| (column(j).param, column(j).axis) != term)
+                    .collect();
+                let t = trial(stats, &without, fit_options, options.variance_inflation).ok()?;
+                Some((term, cv_score(&t.cv, &scale), t))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let Some(((param, axis), score, t)) = cheapest else {
+            break;
+        };
+        if score > best + noise {
+            break;
+        }
+        out.push(Unsupported {
+            name: format!("{} on {axis}", stats.extended.params[param].name),
+            score_change: score - best,
+        });
+        best = best.min(score);
+        *kept = t.columns.clone();
+        *current = t;
+    }
+    out
+}
+
+/// Validation gain used to rank accepted candidates of one group: a named mechanism's
+/// gain counts `1 + look_alike` times, so it is preferred over an unspecific hypothesis
+/// (a generic term, a freed moment coefficient) that explains about as much, but not
+/// over one that explains clearly more.
 fn preference(s: &CandidateScore, look_alike: f64) -> f64 {
-    match s.kind {
-        EffectKind::Generic => s.total_gain,
-        _ => s.total_gain * (1.0 + look_alike),
+    if s.kind.is_unspecific() {
+        s.total_gain
+    } else {
+        s.total_gain * (1.0 + look_alike)
     }
 }
 
-/// Scores candidate `c` added to the model with candidates `added`.
+/// Scores candidate `c` added to the model with columns `kept`.
 fn score(
     stats: &CandidateStatistics,
-    added: &[usize],
+    kept: &[usize],
     c: usize,
     current: &Trial,
     fit_options: &FitOptions,
@@ -359,11 +525,10 @@ fn score(
     level: f64,
 ) -> (CandidateScore, usize, Option<Trial>) {
     let cand = &stats.candidates[c];
-    let mut params: Vec<usize> = added
-        .iter()
-        .flat_map(|&a| stats.candidate_params[a].clone())
-        .collect();
-    params.extend_from_slice(&stats.candidate_params[c]);
+    let own_params = &stats.candidate_params[c];
+    let mut params = kept.to_vec();
+    params.extend(stats.columns_of(|p| own_params.contains(&p)));
+    params.sort_unstable();
     let axes = cand.axes();
     let mut s = CandidateScore {
         name: cand.name.clone(),
@@ -402,7 +567,7 @@ fn score(
         })
         .collect();
     s.min_p = s.parameters.iter().map(|p| p.p).fold(1.0, f64::min);
-    s.validation_gain = gains(&current.validation, &t.validation);
+    s.validation_gain = gains(&current.cv, &t.cv);
     // The MMR couples the axes through shared parameters, so a candidate can pay on an
     // axis it has no column on (freeing a moment coefficient lets F_z fit itself):
     // gains count on every axis, losses too.
@@ -442,7 +607,8 @@ fn score(
 
 /// The whole procedure on in-memory data: fits `base` on `fit_data`, builds the
 /// candidates from its estimates, accumulates them over both parts and runs
-/// [`diagnose`]. (The `fit` pipeline does the same while streaming files.)
+/// [`diagnose`] with `validation_data` as the one cross-validation fold. (The `fit`
+/// pipeline does the same while streaming files.)
 pub fn diagnose_chunks(
     vehicle: &crate::vehicle::Vehicle,
     base: &ModelStructure,
@@ -477,13 +643,15 @@ pub fn diagnose_chunks(
             acc.push(&extended, c, &mut ws).map_err(|e| err(&e))?;
         }
     }
+    let folds = Folds::holdout("validation data", fa.clone(), va);
     let stats = CandidateStatistics {
         extended: &extended,
         candidates: &set.candidates,
         candidate_params: &set.params,
         base_params: base.params.len(),
         fit: &fa,
-        validation: &va,
+        folds: &folds,
+        report: None,
     };
     diagnose(&stats, fit_options, options)
 }

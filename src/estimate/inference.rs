@@ -99,14 +99,86 @@ impl OverallMetrics {
     }
 }
 
-/// R², NRMSE and TIC per axis of the model `structure` with parameters `theta` (one per
-/// `structure.params`) on the data summarised by `acc` (e.g. validation data): no pass
-/// over the samples is needed.
-pub fn evaluate(
+/// Sums of one axis' prediction errors on some data, from which R², NRMSE and TIC
+/// follow; sums of disjoint data sets (cross-validation folds) pool by [`ErrorSums::add`]
+/// into the metrics of the concatenated predictions.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ErrorSums {
+    /// Output axis.
+    pub axis: Axis,
+    /// Samples.
+    pub n: f64,
+    /// Σ(z − ŷ)², in the axis unit squared.
+    pub sse: f64,
+    /// Σŷ² of the model output.
+    pub predicted_ss: f64,
+    /// Mean of the measured (corrected) output z̄.
+    pub mean: f64,
+    /// Σ(z − z̄)².
+    pub centred_ss: f64,
+    /// Σz².
+    pub output_ss: f64,
+    /// Smallest z.
+    pub min: f64,
+    /// Largest z.
+    pub max: f64,
+}
+
+impl ErrorSums {
+    /// No data.
+    pub fn empty(axis: Axis) -> Self {
+        Self {
+            axis,
+            n: 0.0,
+            sse: 0.0,
+            predicted_ss: 0.0,
+            mean: 0.0,
+            centred_ss: 0.0,
+            output_ss: 0.0,
+            min: f64::INFINITY,
+            max: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Adds the sums of disjoint data (moments combined by Chan et al.'s pairwise update).
+    pub fn add(&mut self, other: &ErrorSums) {
+        let n = self.n + other.n;
+        if n == 0.0 {
+            return;
+        }
+        let delta = other.mean - self.mean;
+        self.centred_ss += other.centred_ss + delta * delta * self.n * other.n / n;
+        self.mean += delta * other.n / n;
+        self.n = n;
+        self.sse += other.sse;
+        self.predicted_ss += other.predicted_ss;
+        self.output_ss += other.output_ss;
+        self.min = self.min.min(other.min);
+        self.max = self.max.max(other.max);
+    }
+
+    /// R², RMSE, NRMSE and TIC of these sums.
+    pub fn metrics(&self) -> AxisMetrics {
+        let n = self.n;
+        let rmse = (self.sse / n).sqrt();
+        AxisMetrics {
+            axis: self.axis,
+            r2: 1.0 - self.sse / self.centred_ss,
+            rmse,
+            nrmse: rmse / (self.max - self.min),
+            tic: rmse / ((self.predicted_ss / n).sqrt() + (self.output_ss / n).sqrt()),
+        }
+    }
+}
+
+/// Prediction-error sums per axis of the model `structure` with parameters `theta` (one
+/// per `structure.params`) on the data summarised by `acc`: no pass over the samples is
+/// needed.
+pub fn error_sums(
     structure: &ModelStructure,
     theta: &[f64],
     acc: &Accumulator,
-) -> Result<[AxisMetrics; 6], EstimateError> {
+) -> Result<[ErrorSums; 6], EstimateError> {
     if theta.len() != structure.params.len() || acc.n_columns() != structure.columns.len() {
         return Err(EstimateError::ShapeMismatch {
             parameters: structure.params.len(),
@@ -121,7 +193,6 @@ pub fn evaluate(
             parameters: theta.len(),
         });
     }
-    let n = acc.count() as f64;
     Ok(Axis::ALL.map(|axis| {
         let mut fit = vec![0.0; acc.m()];
         for c in structure.axis_columns(axis) {
@@ -130,18 +201,29 @@ pub fn evaluate(
         let zc = acc.output_index(axis);
         let mut resid: Vec<f64> = fit.iter().map(|v| -v).collect();
         resid[zc] = 1.0;
-        let sse = acc.combination_norm2(&resid);
-        let yy = acc.combination_norm2(&fit);
-        let zz = acc.cross(zc, zc);
-        let rmse = (sse / n).sqrt();
-        AxisMetrics {
+        ErrorSums {
             axis,
-            r2: 1.0 - sse / acc.output_centred_ss(axis),
-            rmse,
-            nrmse: rmse / (acc.max(zc) - acc.min(zc)),
-            tic: rmse / ((yy / n).sqrt() + (zz / n).sqrt()),
+            n: acc.count() as f64,
+            sse: acc.combination_norm2(&resid),
+            predicted_ss: acc.combination_norm2(&fit),
+            mean: acc.output_mean(axis),
+            centred_ss: acc.output_centred_ss(axis),
+            output_ss: acc.cross(zc, zc),
+            min: acc.min(zc),
+            max: acc.max(zc),
         }
     }))
+}
+
+/// R², NRMSE and TIC per axis of the model `structure` with parameters `theta` (one per
+/// `structure.params`) on the data summarised by `acc` (e.g. validation data): no pass
+/// over the samples is needed.
+pub fn evaluate(
+    structure: &ModelStructure,
+    theta: &[f64],
+    acc: &Accumulator,
+) -> Result<[AxisMetrics; 6], EstimateError> {
+    Ok(error_sums(structure, theta, acc)?.map(|s| s.metrics()))
 }
 
 #[cfg(test)]

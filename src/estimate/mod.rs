@@ -13,6 +13,7 @@
 //! [`identifiability`] guards every solve: parameters the data cannot separate are
 //! reported and refused or dropped, never estimated.
 
+pub mod crossval;
 pub mod diagnostics;
 pub mod fsoa;
 pub mod identifiability;
@@ -23,10 +24,13 @@ pub mod ols;
 
 use serde::Serialize;
 
+pub use crossval::{CrossValidation, Folds, cross_validate};
 pub use diagnostics::{DiagnosticOptions, ResidualDiagnostics, ResidualPass};
 pub use fsoa::{Addition, FsoaStep, FsoaTable, fsoa, score_addition};
 pub use identifiability::{DroppedTerm, ProblemConditioning};
-pub use inference::{AxisMetrics, OverallMetrics, ParameterEstimate, evaluate};
+pub use inference::{
+    AxisMetrics, ErrorSums, OverallMetrics, ParameterEstimate, error_sums, evaluate,
+};
 pub use mmr::Weighting;
 pub use ols::{AxisOls, axis_ols};
 

@@ -7,13 +7,13 @@
 use serde::{Deserialize, Serialize};
 
 use crate::diagnose::{CandidateScore, Diagnosis};
-use crate::estimate::{AxisMetrics, Fit, ResidualDiagnostics};
+use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
 use crate::model::{ModelOptions, ModelStructure};
 use crate::sample::Axis;
 use crate::vehicle::Vehicle;
 
 /// Version of the JSON report layout; bumped on any incompatible change.
-pub const REPORT_SCHEMA_VERSION: u32 = 1;
+pub const REPORT_SCHEMA_VERSION: u32 = 2;
 
 /// The whole report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -40,8 +40,12 @@ pub struct Report {
     pub dropped_parameters: Vec<DroppedRow>,
     /// MMR fit per axis on the fit data (seed Table 4).
     pub axes: Vec<AxisRow>,
-    /// The same on the validation data.
+    /// The same on the validation data (the validation logs, else cross-validated).
     pub validation: Vec<AxisRow>,
+    /// Cross-validation of the Eq. 22 model: each fold's held-out metrics (a log
+    /// predicted by the model fitted on the others, or the hold-out segments), then all
+    /// folds pooled.
+    pub cross_validation: Vec<FoldRow>,
     /// FSOA table per axis (seed Tables 2–3).
     pub fsoa: Vec<FsoaReport>,
     /// Residual covariance R of the per-axis fits, axes in Fx…Mz order.
@@ -55,15 +59,51 @@ pub struct Report {
     pub diagnosis: Option<DiagnosisReport>,
 }
 
+/// Held-out metrics of one cross-validation fold (or of all pooled).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FoldRow {
+    /// The held-out data: a log's file name, `hold-out segments`, or `pooled`.
+    pub name: String,
+    /// Metrics per axis.
+    pub axes: Vec<AxisRow>,
+}
+
+/// Held-out metrics before and after the diagnosis on one data set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BeforeAfterRow {
+    /// The held-out data: a log's file name, `hold-out segments`, `pooled`, or
+    /// `validation logs`.
+    pub name: String,
+    /// Eq. 22 model, per axis.
+    pub before: Vec<AxisRow>,
+    /// Final model, per axis.
+    pub after: Vec<AxisRow>,
+}
+
+/// A parameter left out of the final model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct UnsupportedRow {
+    /// Parameter name.
+    pub name: String,
+    /// Rise of the cross-validation score when left out (module `diagnose::procedure`).
+    pub score_change: f64,
+}
+
 /// The closing-the-loop result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DiagnosisReport {
     /// Effects added, in order.
     pub effects_added: Vec<EffectRow>,
-    /// Validation metrics before any effect was added.
+    /// Parameters left out of the final model: not supported by held-out data.
+    pub unsupported: Vec<UnsupportedRow>,
+    /// Cross-validated metrics before any effect was added (all folds pooled).
     pub before: Vec<AxisRow>,
-    /// Validation metrics of the final model.
+    /// Cross-validated metrics of the final model (all folds pooled).
     pub after: Vec<AxisRow>,
+    /// Per fold, then pooled: before and after.
+    pub folds: Vec<BeforeAfterRow>,
+    /// On the reporting-only validation logs, when given: before and after.
+    pub validation: Option<BeforeAfterRow>,
     /// Every step's ranked candidates.
     pub steps: Vec<StepRow>,
 }
@@ -139,12 +179,44 @@ impl From<&CandidateScore> for EffectRow {
     }
 }
 
+fn rows(m: &[AxisMetrics; 6]) -> Vec<AxisRow> {
+    m.iter().map(AxisRow::from).collect()
+}
+
+fn before_after(name: &str, before: &[AxisMetrics; 6], after: &[AxisMetrics; 6]) -> BeforeAfterRow {
+    BeforeAfterRow {
+        name: name.to_string(),
+        before: rows(before),
+        after: rows(after),
+    }
+}
+
 impl From<&Diagnosis> for DiagnosisReport {
     fn from(d: &Diagnosis) -> Self {
+        let mut folds: Vec<BeforeAfterRow> = d
+            .folds
+            .iter()
+            .zip(d.before_folds.iter().zip(&d.after_folds))
+            .map(|(n, (b, a))| before_after(n, b, a))
+            .collect();
+        folds.push(before_after("pooled", &d.before, &d.after));
         Self {
             effects_added: d.effects_added.iter().map(EffectRow::from).collect(),
-            before: d.before.iter().map(AxisRow::from).collect(),
-            after: d.after.iter().map(AxisRow::from).collect(),
+            unsupported: d
+                .unsupported
+                .iter()
+                .map(|u| UnsupportedRow {
+                    name: u.name.clone(),
+                    score_change: u.score_change,
+                })
+                .collect(),
+            before: rows(&d.before),
+            after: rows(&d.after),
+            folds,
+            validation: d
+                .validation
+                .as_ref()
+                .map(|[b, a]| before_after("validation logs", b, a)),
             steps: d
                 .steps
                 .iter()
@@ -284,9 +356,23 @@ impl Report {
         validation: &[AxisMetrics; 6],
         validation_samples: u64,
         validation_source: &str,
+        cross_validation: (&[String], &CrossValidation),
         diagnostics: Option<&ResidualDiagnostics>,
         diagnosis: Option<&Diagnosis>,
     ) -> Self {
+        let (fold_names, cv) = cross_validation;
+        let mut folds: Vec<FoldRow> = fold_names
+            .iter()
+            .enumerate()
+            .map(|(j, n)| FoldRow {
+                name: n.clone(),
+                axes: rows(&cv.fold_metrics(j)),
+            })
+            .collect();
+        folds.push(FoldRow {
+            name: "pooled".into(),
+            axes: rows(&cv.pooled_metrics()),
+        });
         let coloured = |name: &str| {
             diagnostics.and_then(|d| {
                 d.std_errors
@@ -336,6 +422,7 @@ impl Report {
                 .collect(),
             axes: fit.metrics.iter().map(AxisRow::from).collect(),
             validation: validation.iter().map(AxisRow::from).collect(),
+            cross_validation: folds,
             fsoa: fit
                 .axes
                 .iter()

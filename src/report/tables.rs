@@ -6,7 +6,7 @@
 
 use std::fmt::Write;
 
-use super::summary::{DiagnosisReport, FsoaReport, Report};
+use super::summary::{AxisRow, DiagnosisReport, FsoaReport, Report};
 
 /// All tables, as printed by `mrsysid fit`.
 pub fn render(report: &Report) -> String {
@@ -32,7 +32,7 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "Diagnosis: effects the Eq. 22 model lacks (scored on validation data)"
+        "Diagnosis: effects the Eq. 22 model lacks (every decision cross-validated on the fit data)"
     );
     for (k, step) in d.steps.iter().enumerate() {
         let _ = writeln!(
@@ -46,11 +46,11 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
         let _ = writeln!(
             out,
             "    {:<26} {:>9} {:>10}  verdict",
-            "candidate", "val gain", "min P"
+            "candidate", "CV gain", "min P"
         );
         for c in step.ranking.iter().take(8) {
-            // The ranking's measure: relative validation-NRMSE reductions summed over
-            // all axes.
+            // The ranking's measure: relative cross-validated NRMSE reductions summed
+            // over all axes.
             let gain: f64 = c.validation_gain.iter().sum();
             let verdict = if c.rejected.is_empty() {
                 "accepted"
@@ -85,17 +85,33 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
         };
         let _ = writeln!(out, "  {what}: {} (axes {})", e.name, axes.join(", "));
         for p in &e.parameters {
+            // A freed moment coefficient is estimated as moment value − force value.
+            let tie = if p.name.contains('@') {
+                format!(
+                    " (moment value - force value: {:.1} sigma)",
+                    p.estimate / p.std
+                )
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 out,
-                "    {} = {}",
+                "    {} = {}{tie}",
                 p.name,
                 with_unit(&p.name, p.estimate, p.std, &p.unit)
             );
         }
     }
+    for u in &d.unsupported {
+        let _ = writeln!(
+            out,
+            "  not supported by these data (left out): {} (CV score {:+.1} when left out)",
+            u.name, u.score_change
+        );
+    }
     let _ = writeln!(
         out,
-        "  validation {:>4} {:>12} {:>12} {:>8} {:>8} {:>8} {:>8}",
+        "  cross-val. {:>4} {:>12} {:>12} {:>8} {:>8} {:>8} {:>8}",
         "axis", "NRMSE before", "NRMSE after", "TIC bef.", "TIC aft.", "R2 bef.", "R2 aft."
     );
     for (b, a) in d.before.iter().zip(&d.after) {
@@ -111,6 +127,19 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
             100.0 * a.r2
         );
     }
+    let _ = writeln!(out, "  R2 [%] per held-out data, before -> after");
+    let rows: Vec<(String, &Vec<AxisRow>)> = d
+        .folds
+        .iter()
+        .chain(&d.validation)
+        .flat_map(|f| {
+            [
+                (format!("{} before", f.name), &f.before),
+                (format!("{} after", f.name), &f.after),
+            ]
+        })
+        .collect();
+    r2_rows(&mut out, rows.iter().map(|(n, a)| (n.as_str(), *a)));
     out.push('\n');
     out
 }
@@ -209,7 +238,44 @@ fn fit_table(out: &mut String, r: &Report) {
             100.0 * v.r2
         );
     }
+    if r.cross_validation.len() > 2 {
+        let _ = writeln!(
+            out,
+            "  cross-validated R2 [%] (each log predicted by the model fitted on the others)"
+        );
+        r2_rows(
+            out,
+            r.cross_validation
+                .iter()
+                .map(|f| (f.name.as_str(), &f.axes)),
+        );
+    }
     out.push('\n');
+}
+
+/// One line of R² [%] per axis for each named row, under an axis header.
+fn r2_rows<'a>(out: &mut String, rows: impl Iterator<Item = (&'a str, &'a Vec<AxisRow>)>) {
+    let _ = writeln!(
+        out,
+        "    {:<44} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7}",
+        "", "Fx", "Fy", "Fz", "Mx", "My", "Mz"
+    );
+    for (name, axes) in rows {
+        let _ = write!(out, "    {:<44}", truncate(name, 44));
+        for a in axes {
+            let _ = write!(out, " {:>7.1}", 100.0 * a.r2);
+        }
+        out.push('\n');
+    }
+}
+
+fn truncate(s: &str, n: usize) -> String {
+    if s.chars().count() <= n {
+        s.to_string()
+    } else {
+        let keep: String = s.chars().take(n - 1).collect();
+        format!("{keep}~")
+    }
 }
 
 /// Power of ten k such that |x|·10^k lies in [1, 1000), for a readable scaled estimate.

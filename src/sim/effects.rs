@@ -13,6 +13,8 @@
 //! | `vortex_ring=k` | k (–, peak fractional thrust loss) | each rotor's thrust × (1 − k exp(−((w_i/ν0 − 1)/0.5)²) exp(−(V_h/ν0)²)), w_i its descent speed (down +) |
 //! | `delay=τ` | s | the logged rotor speed is the true one τ seconds earlier (flight only) |
 //! | `wind=wn,we,wd` | m/s, NED | steady wind; the log holds ground-relative velocity instead of the air-relative velocity of the data contract (flight only) |
+//! | `flapping=a` | N s²/rad | blade flapping at a stiff hub: rotor i adds the hub moment a Ω_i (−v_i, u_i, 0), (u_i, v_i) its hub's in-plane air-relative velocity |
+//! | `dynamic_inflow=k` | N s²/rad | thrust responding to rotor acceleration: rotor i's thrust changes by k Ω̇_i (acting at its hub) |
 
 use std::fmt;
 use std::str::FromStr;
@@ -66,10 +68,20 @@ pub enum Effect {
         /// Wind velocity, NED, m/s.
         ned: [f64; 3],
     },
+    /// Hub moment of flapping rotors, a Ω_i (−v_i, u_i, 0).
+    Flapping {
+        /// Moment per unit rotor speed and hub in-plane speed, N s²/rad.
+        a: f64,
+    },
+    /// Thrust change with rotor acceleration, k Ω̇_i per rotor.
+    DynamicInflow {
+        /// Thrust per unit rotor acceleration, N s²/rad.
+        k: f64,
+    },
 }
 
 /// All effect names, for help texts.
-pub const EFFECT_NAMES: [&str; 8] = [
+pub const EFFECT_NAMES: [&str; 10] = [
     "ground_effect",
     "weak_rotor",
     "cg_offset",
@@ -78,6 +90,8 @@ pub const EFFECT_NAMES: [&str; 8] = [
     "vortex_ring",
     "delay",
     "wind",
+    "flapping",
+    "dynamic_inflow",
 ];
 
 impl Effect {
@@ -92,6 +106,8 @@ impl Effect {
             Self::VortexRing { .. } => "vortex_ring",
             Self::Delay { .. } => "delay",
             Self::Wind { .. } => "wind",
+            Self::Flapping { .. } => "flapping",
+            Self::DynamicInflow { .. } => "dynamic_inflow",
         }
     }
 
@@ -118,6 +134,8 @@ impl fmt::Display for Effect {
             } => write!(f, "weak_rotor={rotor},{thrust_scale},{torque_scale}"),
             Self::CgOffset { d } => write!(f, "cg_offset={}", list(d)),
             Self::WakeInteraction { k } => write!(f, "wake_interaction={k}"),
+            Self::Flapping { a } => write!(f, "flapping={a}"),
+            Self::DynamicInflow { k } => write!(f, "dynamic_inflow={k}"),
             Self::QuadraticDrag { areas } => write!(f, "quadratic_drag={}", list(areas)),
             Self::VortexRing { k } => write!(f, "vortex_ring={k}"),
             Self::Delay { seconds } => write!(f, "delay={seconds}"),
@@ -254,6 +272,14 @@ impl FromStr for Effect {
                     ned: [values[0], values[1], values[2]],
                 }
             }
+            "flapping" => {
+                want(1..=1, "`flapping=a` (N s^2/rad)")?;
+                Self::Flapping { a: values[0] }
+            }
+            "dynamic_inflow" => {
+                want(1..=1, "`dynamic_inflow=k` (N s^2/rad)")?;
+                Self::DynamicInflow { k: values[0] }
+            }
             other => {
                 return Err(format!(
                     "unknown effect `{other}`; known effects: {}",
@@ -347,6 +373,24 @@ impl Effects {
             Effect::WakeInteraction { k } => Some(*k),
             _ => None,
         })
+    }
+
+    /// Flapping hub-moment coefficient a (N s²/rad); zero when off.
+    pub fn flapping(&self) -> f64 {
+        self.find(|e| match e {
+            Effect::Flapping { a } => Some(*a),
+            _ => None,
+        })
+        .unwrap_or(0.0)
+    }
+
+    /// Thrust per unit rotor acceleration k (N s²/rad); zero when off.
+    pub fn dynamic_inflow(&self) -> f64 {
+        self.find(|e| match e {
+            Effect::DynamicInflow { k } => Some(*k),
+            _ => None,
+        })
+        .unwrap_or(0.0)
     }
 
     /// Quadratic drag areas (m²), if on.

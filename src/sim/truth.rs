@@ -232,6 +232,10 @@ impl TruthModel {
                 thrust_factor *= vortex_ring_factor(k, v_hub[2], v_hub[0].hypot(v_hub[1]), nu0);
             }
             f[2] *= thrust_factor;
+            f[2] -= self.effects.dynamic_inflow() * x.omega_dot[i];
+            let flapping = self.effects.flapping() * x.omega[i];
+            m[0] -= flapping * v_hub[1];
+            m[1] += flapping * v_hub[0];
             if let Some((j, s, sq)) = weak
                 && j == i
             {
