@@ -12,8 +12,8 @@
 //! never steer a choice, so their figures stay unbiased.
 //!
 //! A candidate is accepted when
-//! 1. its MMR estimates are significant: the smallest P-value of its parameters is below
-//!    α / (number of named candidates scored in the step) (Bonferroni);
+//! 1. its MMR estimates are significant: the joint Wald test of all its parameters has a
+//!    P-value below α / (number of named candidates scored in the step) (Bonferroni);
 //! 2. it is plausible: every estimate lies in the physical range of its parameter;
 //! 3. it pays on held-out data: on some axis the cross-validated NRMSE (the mean over
 //!    folds, so each log counts alike) falls by at least [`DiagnoseOptions::min_gain`]
@@ -117,8 +117,9 @@ pub struct CandidateScore {
     pub validation_gain: [f64; 6],
     /// Sum of the gains over all six axes (losses count negative).
     pub total_gain: f64,
-    /// Smallest P-value of its parameters.
-    pub min_p: f64,
+    /// P-value of the joint Wald test that all its parameters are zero (one test per
+    /// candidate, however many parameters it has).
+    pub p: f64,
     /// Why it was not accepted (empty when it was acceptable).
     pub rejected: String,
 }
@@ -242,6 +243,10 @@ struct Trial {
     structure: ModelStructure,
     /// Column indices into `stats.extended`.
     columns: Vec<usize>,
+    /// Parameters estimated (indices into `structure.params`) and their covariance,
+    /// row-major in that order (white residuals).
+    estimated: Vec<usize>,
+    covariance: Vec<f64>,
 }
 
 /// Fits the sub-model of `stats.extended` with columns `columns` (indices into
@@ -272,7 +277,67 @@ fn trial(
         cv,
         structure,
         columns,
+        estimated: fit.mmr.param_index.clone(),
+        covariance: fit.mmr.covariance.clone(),
     })
+}
+
+/// P-value of the Wald test that the parameters `own` (indices into the trial's
+/// structure) are all zero: W = θᵀ(κΣ)⁻¹θ against χ² with one degree of freedom per
+/// estimated parameter, κ the coloured-residual variance inflation. A joint test, so a
+/// candidate of several correlated parameters is not penalised for their correlation
+/// (each one's t can be small while together they explain much). 1 when none of them
+/// could be estimated.
+fn joint_p(t: &Trial, own: &[usize], inflation: f64) -> f64 {
+    let at: Vec<usize> = own
+        .iter()
+        .filter_map(|p| t.estimated.iter().position(|e| e == p))
+        .collect();
+    let k = at.len();
+    let n = t.estimated.len();
+    let theta: Vec<f64> = at.iter().map(|&i| t.theta[t.estimated[i]]).collect();
+    let cov: Vec<f64> = at
+        .iter()
+        .flat_map(|&i| at.iter().map(move |&j| (i, j)))
+        .map(|(i, j)| t.covariance[i * n + j] * inflation.max(1.0))
+        .collect();
+    let (Some(w), Ok(chi2)) = (
+        quadratic_form_inverse(&cov, &theta),
+        ChiSquared::new(k as f64),
+    ) else {
+        return 1.0;
+    };
+    chi2.sf(w)
+}
+
+/// xᵀA⁻¹x for a symmetric positive definite k × k `a` (row-major), by Cholesky; `None`
+/// when `a` is empty or not positive definite.
+#[allow(clippy::needless_range_loop)] // triangular index arithmetic reads clearest
+fn quadratic_form_inverse(a: &[f64], x: &[f64]) -> Option<f64> {
+    let k = x.len();
+    if k == 0 {
+        return None;
+    }
+    let mut l = vec![0.0; k * k];
+    for i in 0..k {
+        for j in 0..=i {
+            let s: f64 = a[i * k + j] - (0..j).map(|m| l[i * k + m] * l[j * k + m]).sum::<f64>();
+            if i == j {
+                if s.is_nan() || s <= 0.0 {
+                    return None;
+                }
+                l[i * k + i] = s.sqrt();
+            } else {
+                l[i * k + j] = s / l[j * k + j];
+            }
+        }
+    }
+    // L y = x, then xᵀA⁻¹x = ‖y‖².
+    let mut y = vec![0.0; k];
+    for i in 0..k {
+        y[i] = (x[i] - (0..i).map(|m| l[i * k + m] * y[m]).sum::<f64>()) / l[i * k + i];
+    }
+    Some(y.iter().map(|v| v * v).sum())
 }
 
 /// Relative reduction per axis of the cross-validated NRMSE, each fold weighted alike
@@ -537,7 +602,7 @@ fn score(
         parameters: Vec::new(),
         validation_gain: [0.0; 6],
         total_gain: 0.0,
-        min_p: 1.0,
+        p: 1.0,
         rejected: String::new(),
     };
     let t = match trial(stats, &params, fit_options, options.variance_inflation) {
@@ -566,7 +631,7 @@ fn score(
             p: t.p[i],
         })
         .collect();
-    s.min_p = s.parameters.iter().map(|p| p.p).fold(1.0, f64::min);
+    s.p = joint_p(&t, &own, options.variance_inflation);
     s.validation_gain = gains(&current.cv, &t.cv);
     // The MMR couples the axes through shared parameters, so a candidate can pay on an
     // axis it has no column on (freeing a moment coefficient lets F_z fit itself):
@@ -577,8 +642,8 @@ fn score(
         .validation_gain
         .iter()
         .fold(f64::NEG_INFINITY, |m, &g| m.max(g));
-    s.rejected = if s.min_p >= level {
-        format!("not significant (P = {:.2e} >= {level:.2e})", s.min_p)
+    s.rejected = if s.p >= level {
+        format!("not significant (P = {:.2e} >= {level:.2e})", s.p)
     } else if let Some(p) = s
         .parameters
         .iter()
@@ -654,4 +719,24 @@ pub fn diagnose_chunks(
         report: None,
     };
     diagnose(&stats, fit_options, options)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wald_quadratic_form_matches_the_closed_form() {
+        // One parameter: θ²/σ². Two correlated ones, A = [[4, 2], [2, 3]], x = (1, 2):
+        // A⁻¹ = [[3, −2], [−2, 4]]/8, so xᵀA⁻¹x = (3 − 8 + 16)/8 = 11/8.
+        assert_eq!(quadratic_form_inverse(&[4.0], &[3.0]), Some(2.25));
+        let w = quadratic_form_inverse(&[4.0, 2.0, 2.0, 3.0], &[1.0, 2.0]).unwrap();
+        assert!((w - 11.0 / 8.0).abs() < 1e-15, "{w}");
+        // Not positive definite, or nothing to test.
+        assert_eq!(
+            quadratic_form_inverse(&[1.0, 2.0, 2.0, 1.0], &[1.0, 1.0]),
+            None
+        );
+        assert_eq!(quadratic_form_inverse(&[], &[]), None);
+    }
 }

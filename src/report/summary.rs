@@ -125,8 +125,8 @@ pub struct EffectRow {
     pub parameters: Vec<EffectParameterRow>,
     /// Relative validation-NRMSE reduction per axis, Fx…Mz (positive = better).
     pub validation_gain: Vec<f64>,
-    /// Smallest P-value of its parameters.
-    pub min_p: f64,
+    /// P-value of the joint Wald test of its parameters.
+    pub p: f64,
     /// Why it was not added (empty for an accepted candidate).
     pub rejected: String,
 }
@@ -173,7 +173,7 @@ impl From<&CandidateScore> for EffectRow {
                 })
                 .collect(),
             validation_gain: c.validation_gain.to_vec(),
-            min_p: c.min_p,
+            p: c.p,
             rejected: c.rejected.clone(),
         }
     }

@@ -46,7 +46,7 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
         let _ = writeln!(
             out,
             "    {:<26} {:>9} {:>10}  verdict",
-            "candidate", "CV gain", "min P"
+            "candidate", "CV gain", "P"
         );
         for c in step.ranking.iter().take(8) {
             // The ranking's measure: relative cross-validated NRMSE reductions summed
@@ -62,7 +62,7 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
                 "    {:<26} {:>8.1}% {:>10.2e}  {verdict}",
                 c.name,
                 100.0 * gain,
-                c.min_p
+                c.p
             );
         }
         if !step.look_alikes.is_empty() {
