@@ -503,9 +503,8 @@ impl ModelStructure {
     }
 
     /// The structure restricted to columns `cols` (indices into `self.columns`,
-    /// ascending) and the parameters they use, in this structure's parameter order;
-    /// also returns, for each kept parameter, its index in `self.params`.
-    pub fn select_columns(&self, cols: &[usize]) -> (ModelStructure, Vec<usize>) {
+    /// ascending) and the parameters they use, in this structure's parameter order.
+    pub fn select_columns(&self, cols: &[usize]) -> ModelStructure {
         let mut used: Vec<usize> = cols.iter().map(|&j| self.columns[j].param).collect();
         used.sort_unstable();
         used.dedup();
@@ -519,7 +518,7 @@ impl ModelStructure {
             })
             .collect();
         s.required = s.collect_required_signals();
-        (s, used)
+        s
     }
 
     /// Checks that `chunk` can be assembled with this structure.

@@ -421,7 +421,7 @@ fn real_neurobem_three_logs_are_cross_validated_log_by_log() {
     assert_eq!(names, [FIGURE8, MELON, RACETRACK, "pooled"]);
     let d = &v["diagnosis"];
     let pooled = |part: &str, axis: usize| fold_r2(d, "pooled", part, axis);
-    for (axis, at_least) in [(0, 0.9), (1, 0.9), (2, 0.9), (3, 0.40), (4, 0.55)] {
+    for (axis, at_least) in [(0, 0.9), (1, 0.9), (2, 0.9), (3, 0.43), (4, 0.50)] {
         assert!(
             pooled("after", axis) >= at_least,
             "axis {axis}: {}",
@@ -569,9 +569,34 @@ fn clean_flights_get_no_undeclared_effect() {
 fn diagnosis_on_a_flight_finds_a_rotor_speed_delay_within_one_sample() {
     // A 30 s flight whose logged rotor speeds lag the true ones by 20 ms (2 log samples
     // at 100 Hz); the delay must come out within one sample (10 ms).
+    // Thrust responding to rotor acceleration (ΔT_i = k Ω̇_i) is the same model to
+    // within the Ω-weighting of the delay's dT/dΩ (±20 % about hover here): when it is
+    // added first, the step must name the delay as a look-alike the data cannot tell
+    // apart, and the delay candidate scored in that step must hold the delay.
     let v = simulate_and_fit("delay", &["--effect", "delay=0.02", "--seed", "8"]);
-    let first = first_effect(&v["diagnosis"]);
-    assert_eq!(first["name"], "rotor-speed delay");
-    let tau = effect_parameter(first, "rotor_speed_delay");
+    let d = &v["diagnosis"];
+    let first = first_effect(d);
+    let step = d["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["added"] == first["name"])
+        .unwrap();
+    if first["name"] != "rotor-speed delay" {
+        assert_eq!(first["name"], "thrust from rotor acceleration");
+        let look_alikes = step["look_alikes"].as_array().unwrap();
+        assert!(
+            look_alikes.iter().any(|n| n == "rotor-speed delay"),
+            "{look_alikes:?}"
+        );
+    }
+    let delay = step["ranking"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "rotor-speed delay")
+        .unwrap();
+    assert_eq!(delay["rejected"], "", "{delay}");
+    let tau = effect_parameter(delay, "rotor_speed_delay");
     assert!((tau - 0.02).abs() < 0.01, "{tau}");
 }

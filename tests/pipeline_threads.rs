@@ -32,7 +32,7 @@ fn flight_part(name: &str, rows: std::ops::Range<usize>) -> PathBuf {
     path
 }
 
-fn request(logs: &[&Path], threads: usize) -> FitRequest {
+fn request(logs: &[&Path], validate: &[&Path], threads: usize) -> FitRequest {
     let vehicle =
         Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle");
     let structure = ModelStructure::eq22(&vehicle, ModelOptions::default());
@@ -44,7 +44,7 @@ fn request(logs: &[&Path], threads: usize) -> FitRequest {
         structure,
         fit: FitOptions::default(),
         holdout: Holdout::default(),
-        validate: Vec::new(),
+        validate: validate.iter().map(|p| p.to_path_buf()).collect(),
         threads,
         second_pass: true,
         diagnose: Some(DiagnoseOptions::default()),
@@ -79,28 +79,34 @@ fn assert_decimated(series: &PlotSeries, samples: u64) {
 
 #[test]
 fn one_two_and_four_threads_give_the_same_report() {
-    // Logs of 11.01 s and 30 s at 100 Hz (2 s segments, every 5th held out): 901 + 901
-    // + 2400 fit samples, so the plot stride is 2 and the second log's first sample has
-    // an odd place in the run: decimating each log from zero would plot one point too
-    // many there.
+    // Three fit logs of 11.01, 11.01 and 30 s at 100 Hz (each predicted from the others
+    // in the cross-validation): 1101 + 1101 + 3000 fit samples, so the plot stride is 2
+    // and the second log's first sample has an odd place in the run: decimating each log
+    // from zero would plot one point too many there. A fourth log validates.
     let logs = [
         flight_part("a.csv", 0..1101),
         flight_part("b.csv", 1101..2202),
         flight_part("c.csv", 0..3000),
     ];
+    let validate = flight_part("d.csv", 500..2500);
     let logs: Vec<&Path> = logs.iter().map(|p| p.as_path()).collect();
-    let one = pipeline::run(&request(&logs, 1)).expect("fit on one thread");
+    let validate = [validate.as_path()];
+    let one = pipeline::run(&request(&logs, &validate, 1)).expect("fit on one thread");
     assert!(one.diagnosis.is_some() && one.diagnostics.is_some());
-    assert_eq!(one.fit_stats.count(), 901 + 901 + 2400);
+    assert_eq!(one.fit_stats.count(), 1101 + 1101 + 3000);
+    assert_eq!(one.validation_stats.count(), 2000);
+    assert_eq!(one.cross_validation.0, ["a.csv", "b.csv", "c.csv"]);
     assert_decimated(&one.fit_series, one.fit_stats.count());
     assert_decimated(&one.validation_series, one.validation_stats.count());
     // Two threads: two logs at a time; four threads: reading overlapped within a log.
     for threads in [2, 4] {
-        let many = pipeline::run(&request(&logs, threads)).expect("fit on threads");
+        let many = pipeline::run(&request(&logs, &validate, threads)).expect("fit on threads");
         assert_same_outcome(&one, &many, &format!("{threads} threads"));
     }
-    // One log, two threads: its reading overlaps the accumulation.
-    let single = pipeline::run(&request(&logs[..1], 1)).expect("one log");
-    let overlapped = pipeline::run(&request(&logs[..1], 2)).expect("one log, 2 threads");
+    // One log (2 s segments, every 5th held out), two threads: its reading overlaps the
+    // accumulation.
+    let single = pipeline::run(&request(&logs[..1], &[], 1)).expect("one log");
+    assert_eq!(single.fit_stats.count(), 901);
+    let overlapped = pipeline::run(&request(&logs[..1], &[], 2)).expect("one log, 2 threads");
     assert_same_outcome(&single, &overlapped, "one log, overlapped reading");
 }

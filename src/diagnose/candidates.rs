@@ -44,7 +44,8 @@ pub enum EffectKind {
     /// Rotor hub moment from blade flapping in the hub's in-plane airflow.
     RotorFlapping,
     /// Roll and pitch damping from each rotor's thrust change with its hub's vertical
-    /// velocity, with its own coefficient.
+    /// velocity, with its own coefficient (a completion: Eq. 22 holds these terms only
+    /// inside the C_T_muw column it shares with the vertical force).
     RotorRateDamping,
     /// Thrust responding to rotor acceleration (dynamic inflow, or a rotor speed logged
     /// through a lag).
@@ -61,7 +62,11 @@ impl EffectKind {
     pub fn is_model_completion(self) -> bool {
         matches!(
             self,
-            Self::YawRateDrag | Self::RollPitchRateDrag | Self::LinearVh | Self::CgHeight
+            Self::YawRateDrag
+                | Self::RollPitchRateDrag
+                | Self::LinearVh
+                | Self::CgHeight
+                | Self::RotorRateDamping
         )
     }
 

@@ -257,7 +257,7 @@ fn trial(
     options: &FitOptions,
     inflation: f64,
 ) -> Result<Trial, String> {
-    let (structure, _) = stats.extended.select_columns(columns);
+    let structure = stats.extended.select_columns(columns);
     let columns = columns.to_vec();
     let fit = estimate::fit(&structure, &stats.fit.select(&columns), options)
         .map_err(|e| e.to_string())?;
