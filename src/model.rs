@@ -525,6 +525,7 @@ impl ModelStructure {
             signals,
             columns,
             outputs,
+            measured,
             capacity,
             ..
         } = ws;
@@ -550,6 +551,11 @@ impl ModelStructure {
                 Some(z) => dst.copy_from_slice(z),
                 None => dst.fill(0.0),
             }
+            measured[a] = dst
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                    (lo.min(v), hi.max(v))
+                });
             for t in &self.known[a] {
                 apply_term(dst, t, false, -1.0, &lookup);
             }
@@ -1169,6 +1175,8 @@ pub struct Workspace {
     signals: Vec<f64>,
     columns: Vec<f64>,
     outputs: Vec<f64>,
+    /// Smallest and largest measured output per axis (before the known terms).
+    measured: [(f64, f64); 6],
     capacity: usize,
     len: usize,
     n_columns: usize,
@@ -1210,6 +1218,12 @@ impl Workspace {
     /// Regressor column `j` of the last assembled chunk.
     pub fn column(&self, j: usize) -> &[f64] {
         &self.columns[j * self.capacity..j * self.capacity + self.len]
+    }
+
+    /// Smallest and largest measured output of `axis` (before subtracting the known
+    /// terms) in the last assembled chunk.
+    pub fn measured_range(&self, axis: Axis) -> (f64, f64) {
+        self.measured[axis as usize]
     }
 
     /// Measured output of `axis` minus the known terms, for the last assembled chunk.

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::lstsq::{self, LeastSquares};
 use super::{EstimateError, FitOptions, UnidentifiablePolicy};
+use crate::model::{ModelStructure, Signal};
 
 /// Conditioning of one least-squares problem (a per-axis OLS or the MMR).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -29,8 +30,12 @@ pub struct ProblemConditioning {
 pub struct DroppedTerm {
     /// The removed term.
     pub name: String,
-    /// All terms with weight ≥ 0.1 in the near-null singular directions at the time.
+    /// The other terms with weight ≥ 0.1 in the near-null singular directions at the
+    /// time (empty when the term's own regressor is zero in every sample).
     pub aliased_with: Vec<String>,
+    /// Why it cannot be identified when it is aliased with nothing: its regressor is
+    /// zero in every sample, e.g. `u = v = 0 throughout: no in-plane motion`.
+    pub cause: Option<String>,
     /// Condition number of the equilibrated design before dropping.
     pub condition_number: f64,
 }
@@ -38,13 +43,15 @@ pub struct DroppedTerm {
 /// Solves min ‖X θ − z‖ over the columns of `x` named `names`. When the equilibrated
 /// design is numerically singular, either refuses (error naming the involved terms) or
 /// drops the term with the largest weight in the weakest direction and retries, per
-/// `options`. Returns the solution, the indices of the kept columns and the report.
+/// `options`. A term dropped alone (its column is zero) gets `zero_cause(column)` as its
+/// cause. Returns the solution, the indices of the kept columns and the report.
 pub(crate) fn solve_identifiable(
     problem: &str,
     x: &Mat<f64>,
     z: &[f64],
     names: &[String],
     options: &FitOptions,
+    zero_cause: &dyn Fn(usize) -> String,
 ) -> Result<(LeastSquares, Vec<usize>, ProblemConditioning), EstimateError> {
     let mut kept: Vec<usize> = (0..x.ncols()).collect();
     let mut dropped = Vec::new();
@@ -94,14 +101,73 @@ pub(crate) fn solve_identifiable(
                         condition_number: c.condition_number(),
                     });
                 }
-                let worst = c.worst().expect("non-empty design");
+                // A rank-deficient design has at least one column, so a weakest direction.
+                let worst = c.worst().unwrap_or(0);
+                let name = names[kept[worst]].clone();
+                let aliased_with: Vec<String> =
+                    involved.into_iter().filter(|n| *n != name).collect();
+                let cause = aliased_with.is_empty().then(|| zero_cause(kept[worst]));
                 dropped.push(DroppedTerm {
-                    name: names[kept[worst]].clone(),
-                    aliased_with: involved,
+                    name,
+                    aliased_with,
+                    cause,
                     condition_number: c.condition_number(),
                 });
                 kept.remove(worst);
             }
         }
     }
+}
+
+/// The motion variables whose being zero makes `signal` zero (V_h = 0 needs u = v = 0).
+fn motion_of(signal: Signal) -> &'static [&'static str] {
+    use Signal::*;
+    match signal {
+        U | AbsU => &["u"],
+        V | AbsV => &["v"],
+        Vh | UOverVh | VOverVh => &["u", "v"],
+        W | AbsW => &["w"],
+        P => &["p"],
+        Q => &["q"],
+        R => &["r"],
+        _ => &[],
+    }
+}
+
+/// Why the regressor columns `columns` of `structure` (all zero in every sample) carry
+/// nothing: when every term of them has a motion factor, the motion that was absent
+/// (`u = v = 0 throughout: no in-plane motion`), else the columns themselves.
+pub(crate) fn zero_column_cause(structure: &ModelStructure, columns: &[usize]) -> String {
+    let mut vars: Vec<&str> = Vec::new();
+    let every_term_moves = columns.iter().all(|&c| {
+        structure.columns[c].terms.iter().all(|t| {
+            let m: Vec<&str> = t
+                .factors
+                .iter()
+                .flat_map(|&f| motion_of(f))
+                .copied()
+                .collect();
+            vars.extend(m.iter().copied());
+            !m.is_empty()
+        })
+    });
+    let labels: Vec<&str> = columns
+        .iter()
+        .map(|&c| structure.columns[c].label.as_str())
+        .collect();
+    if !every_term_moves || vars.is_empty() {
+        return format!("regressor {} is zero in every sample", labels.join(", "));
+    }
+    let order = ["u", "v", "w", "p", "q", "r"];
+    let vars: Vec<&str> = order.into_iter().filter(|v| vars.contains(v)).collect();
+    let what = if vars.iter().all(|v| ["u", "v"].contains(v)) {
+        "no in-plane motion"
+    } else if vars == ["w"] {
+        "no vertical motion"
+    } else if vars.iter().all(|v| ["p", "q", "r"].contains(v)) {
+        "no rotation"
+    } else {
+        "no excitation"
+    };
+    format!("{} = 0 throughout: {what}", vars.join(" = "))
 }
