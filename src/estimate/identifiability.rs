@@ -55,6 +55,22 @@ pub(crate) fn solve_identifiable(
 ) -> Result<(LeastSquares, Vec<usize>, ProblemConditioning), EstimateError> {
     let mut kept: Vec<usize> = (0..x.ncols()).collect();
     let mut dropped = Vec::new();
+    if options.unidentifiable == UnidentifiablePolicy::Drop {
+        // A regressor that is zero in every sample is dropped first, with its cause: it
+        // is not "aliased" with the other zero columns, it carries nothing.
+        kept.retain(|&j| {
+            let zero = x.col(j).norm_l2() == 0.0;
+            if zero {
+                dropped.push(DroppedTerm {
+                    name: names[j].clone(),
+                    aliased_with: Vec::new(),
+                    cause: Some(zero_cause(j)),
+                    condition_number: f64::INFINITY,
+                });
+            }
+            !zero
+        });
+    }
     loop {
         if kept.is_empty() {
             // Every term was dropped: the model of this problem is empty.

@@ -307,9 +307,9 @@ fn check_support(structure: &ModelStructure, acc: &Accumulator) -> Result<(), Es
             return Err(EstimateError::Unsupported {
                 reason: format!(
                     "the {} samples hold only {d} distinct states, fewer than the {n_theta} \
-                     parameters of the model, so at most {d} combinations of them can be \
-                     identified and the fit would interpolate the data; too little \
-                     excitation to identify {}",
+                     parameters of the model, so no axis can determine more than {d} \
+                     combinations of its parameters and the fit would interpolate the \
+                     data; too little excitation to identify {}",
                     acc.count(),
                     all()
                 ),
