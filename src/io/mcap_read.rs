@@ -485,10 +485,8 @@ impl McapSource {
                 Record::Channel(ch) => {
                     self.add_channel(ch.id, &ch.topic, &ch.message_encoding, ch.schema_id)?;
                 }
-                Record::Message { header, data } => {
-                    if self.on_message(&header, &data)? {
-                        return Ok(true);
-                    }
+                Record::Message { header, data } if self.on_message(&header, &data)? => {
+                    return Ok(true);
                 }
                 _ => {}
             }
