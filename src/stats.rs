@@ -1,4 +1,4 @@
-//! Mergeable sufficient statistics of one streaming pass (DESIGN.md, "Architecture").
+//! Mergeable sufficient statistics of one streaming pass.
 //!
 //! The [`Accumulator`] holds, for the augmented data matrix A = [X | Z] (every regressor
 //! column of a [`ModelStructure`] followed by the six known-term-corrected outputs):
