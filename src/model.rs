@@ -526,9 +526,21 @@ impl ModelStructure {
             columns,
             outputs,
             measured,
+            motion,
             capacity,
             ..
         } = ws;
+        let range = |v: &[f64]| {
+            v.iter()
+                .take(n)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                    (lo.min(x), hi.max(x))
+                })
+        };
+        for k in 0..3 {
+            motion[k] = range(&chunk.velocity[k]);
+            motion[3 + k] = range(&chunk.rates[k]);
+        }
         let cap = *capacity;
         let required = &self.required;
         let lookup = |s: Signal| {
@@ -1177,6 +1189,8 @@ pub struct Workspace {
     outputs: Vec<f64>,
     /// Smallest and largest measured output per axis (before the known terms).
     measured: [(f64, f64); 6],
+    /// Smallest and largest u, v, w, p, q, r.
+    motion: [(f64, f64); 6],
     capacity: usize,
     len: usize,
     n_columns: usize,
@@ -1224,6 +1238,11 @@ impl Workspace {
     /// terms) in the last assembled chunk.
     pub fn measured_range(&self, axis: Axis) -> (f64, f64) {
         self.measured[axis as usize]
+    }
+
+    /// Smallest and largest of u, v, w, p, q, r (index 0..6) in the last assembled chunk.
+    pub fn motion_range(&self, k: usize) -> (f64, f64) {
+        self.motion[k]
     }
 
     /// Measured output of `axis` minus the known terms, for the last assembled chunk.

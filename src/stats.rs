@@ -85,6 +85,8 @@ pub struct Accumulator {
     distinct: Vec<u64>,
     /// Smallest and largest measured output per axis (before the known terms).
     measured: [(f64, f64); 6],
+    /// Smallest and largest u, v, w, p, q, r.
+    motion: [(f64, f64); 6],
 }
 
 /// Distinct regressor rows counted exactly; beyond this many the count saturates (more
@@ -144,6 +146,7 @@ impl Accumulator {
             labels,
             distinct: Vec::new(),
             measured: [(f64::INFINITY, f64::NEG_INFINITY); 6],
+            motion: [(f64::INFINITY, f64::NEG_INFINITY); 6],
         }
     }
 
@@ -196,6 +199,10 @@ impl Accumulator {
             let m = &mut self.measured[axis as usize];
             *m = (m.0.min(lo), m.1.max(hi));
         }
+        for (k, m) in self.motion.iter_mut().enumerate() {
+            let (lo, hi) = ws.motion_range(k);
+            *m = (m.0.min(lo), m.1.max(hi));
+        }
         STACKED.with_borrow_mut(|s| {
             s.a.resize_with(q + n, q, |_, _| 0.0);
             for j in 0..q {
@@ -232,7 +239,12 @@ impl Accumulator {
         for &h in &other.distinct {
             insert_distinct(&mut self.distinct, h);
         }
-        for (m, o) in self.measured.iter_mut().zip(&other.measured) {
+        for (m, o) in self
+            .measured
+            .iter_mut()
+            .zip(&other.measured)
+            .chain(self.motion.iter_mut().zip(&other.motion))
+        {
             *m = (m.0.min(o.0), m.1.max(o.1));
         }
         STACKED.with_borrow_mut(|s| {
@@ -282,6 +294,11 @@ impl Accumulator {
     /// the known terms).
     pub fn measured_range(&self, axis: Axis) -> (f64, f64) {
         self.measured[axis as usize]
+    }
+
+    /// Smallest and largest of the motion variable `k` (0..6: u, v, w, p, q, r).
+    pub fn motion_range(&self, k: usize) -> (f64, f64) {
+        self.motion[k]
     }
 
     /// Hashes the regressor rows of the assembled chunk into the distinct-row set until
@@ -541,6 +558,7 @@ impl Accumulator {
             labels: keep.iter().map(|&j| self.labels[j].clone()).collect(),
             distinct: self.distinct.clone(),
             measured: self.measured,
+            motion: self.motion,
         }
     }
 }

@@ -162,6 +162,12 @@ fn hover_only_data_drop_terms_with_the_cause_in_words() {
             .any(|l| l.contains("dropped C_H_mub (u = v = 0 throughout: no in-plane motion)")),
         "{out}"
     );
+    // A product is zero when one factor is: the cause names only the variable that was
+    // zero in the data (w varies here), never "u = w = 0".
+    assert!(
+        out.contains("dropped C_H_mub_muw (u*w) (u = 0 throughout: no in-plane motion)"),
+        "{out}"
+    );
     for w in &warnings {
         // "dropped X (not separable from … X …)" never names a term as its own alias.
         let name = w

@@ -9,6 +9,7 @@ use serde::Serialize;
 use super::lstsq::{self, LeastSquares};
 use super::{EstimateError, FitOptions, UnidentifiablePolicy};
 use crate::model::{ModelStructure, Signal};
+use crate::stats::Accumulator;
 
 /// Conditioning of one least-squares problem (a per-axis OLS or the MMR).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -135,55 +136,67 @@ pub(crate) fn solve_identifiable(
     }
 }
 
-/// The motion variables whose being zero makes `signal` zero (V_h = 0 needs u = v = 0).
-fn motion_of(signal: Signal) -> &'static [&'static str] {
+/// Motion variables u, v, w, p, q, r, in [`Accumulator::motion_range`] order.
+const MOTION: [&str; 6] = ["u", "v", "w", "p", "q", "r"];
+
+/// The motion variables (indices into [`MOTION`]) all of which being zero makes `signal`
+/// zero (V_h = 0 needs u = v = 0).
+fn motion_of(signal: Signal) -> &'static [usize] {
     use Signal::*;
     match signal {
-        U | AbsU => &["u"],
-        V | AbsV => &["v"],
-        Vh | UOverVh | VOverVh => &["u", "v"],
-        W | AbsW => &["w"],
-        P => &["p"],
-        Q => &["q"],
-        R => &["r"],
+        U | AbsU => &[0],
+        V | AbsV => &[1],
+        Vh | UOverVh | VOverVh => &[0, 1],
+        W | AbsW => &[2],
+        P => &[3],
+        Q => &[4],
+        R => &[5],
         _ => &[],
     }
 }
 
-/// Why the regressor columns `columns` of `structure` (all zero in every sample) carry
-/// nothing: when every term of them has a motion factor, the motion that was absent
-/// (`u = v = 0 throughout: no in-plane motion`), else the columns themselves.
-pub(crate) fn zero_column_cause(structure: &ModelStructure, columns: &[usize]) -> String {
-    let mut vars: Vec<&str> = Vec::new();
-    let every_term_moves = columns.iter().all(|&c| {
+/// Why the regressor columns `columns` of `structure` are zero in every sample of
+/// `acc`: when every term has a factor whose motion variables were zero throughout
+/// (from the logged ranges), those variables and what motion was absent
+/// (`u = v = 0 throughout: no in-plane motion`); else the columns themselves.
+pub(crate) fn zero_column_cause(
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    columns: &[usize],
+) -> String {
+    let zero = |k: usize| acc.motion_range(k) == (0.0, 0.0);
+    let mut vars: Vec<usize> = Vec::new();
+    let explained = columns.iter().all(|&c| {
         structure.columns[c].terms.iter().all(|t| {
-            let m: Vec<&str> = t
+            let cause = t
                 .factors
                 .iter()
-                .flat_map(|&f| motion_of(f))
-                .copied()
-                .collect();
-            vars.extend(m.iter().copied());
-            !m.is_empty()
+                .map(|&f| motion_of(f))
+                .find(|m| !m.is_empty() && m.iter().all(|&k| zero(k)));
+            if let Some(m) = cause {
+                vars.extend(m);
+            }
+            cause.is_some()
         })
     });
-    let labels: Vec<&str> = columns
-        .iter()
-        .map(|&c| structure.columns[c].label.as_str())
-        .collect();
-    if !every_term_moves || vars.is_empty() {
+    if !explained || vars.is_empty() {
+        let labels: Vec<&str> = columns
+            .iter()
+            .map(|&c| structure.columns[c].label.as_str())
+            .collect();
         return format!("regressor {} is zero in every sample", labels.join(", "));
     }
-    let order = ["u", "v", "w", "p", "q", "r"];
-    let vars: Vec<&str> = order.into_iter().filter(|v| vars.contains(v)).collect();
-    let what = if vars.iter().all(|v| ["u", "v"].contains(v)) {
+    vars.sort_unstable();
+    vars.dedup();
+    let what = if vars.iter().all(|&k| k < 2) {
         "no in-plane motion"
-    } else if vars == ["w"] {
+    } else if vars == [2] {
         "no vertical motion"
-    } else if vars.iter().all(|v| ["p", "q", "r"].contains(v)) {
+    } else if vars.iter().all(|&k| k >= 3) {
         "no rotation"
     } else {
         "no excitation"
     };
-    format!("{} = 0 throughout: {what}", vars.join(" = "))
+    let names: Vec<&str> = vars.iter().map(|&k| MOTION[k]).collect();
+    format!("{} = 0 throughout: {what}", names.join(" = "))
 }

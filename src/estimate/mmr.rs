@@ -110,7 +110,7 @@ pub(crate) fn solve(
         let cols: Vec<usize> = (0..structure.columns.len())
             .filter(|&c| structure.columns[c].param == p)
             .collect();
-        zero_column_cause(structure, &cols)
+        zero_column_cause(structure, acc, &cols)
     };
     let (ls, params, conditioning) = solve_identifiable("MMR", &g, &rhs, &names, options, &cause)?;
     Ok(MmrSolution {

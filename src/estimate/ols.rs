@@ -80,7 +80,7 @@ pub fn axis_ols(
         });
     }
     let (x, z) = compressed(acc, &cols, axis);
-    let cause = |j: usize| zero_column_cause(structure, &[cols[j]]);
+    let cause = |j: usize| zero_column_cause(structure, acc, &[cols[j]]);
     let (ls, kept, report) =
         solve_identifiable(&format!("OLS {axis}"), &x, &z, &names, options, &cause)?;
     let k = kept.len();
