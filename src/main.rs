@@ -37,7 +37,7 @@ enum Command {
 }
 
 const FIT_EXAMPLES: &str = "Examples:
-  mrsysid fit data/quadx_sweep.csv --vehicle data/vehicles/quad_x.toml
+  mrsysid fit data/quad_x_sweep.csv --vehicle data/vehicles/quad_x.toml
   mrsysid fit a.csv b.csv --vehicle v.toml --validate c.csv --json report.json --model-out model.toml --plots plots/
   mrsysid fit log.csv --vehicle v.toml --mapping examples/neurobem.toml
 

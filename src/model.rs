@@ -561,9 +561,22 @@ impl ModelStructure {
             signals,
             columns,
             outputs,
+            measured,
+            motion,
             capacity,
             ..
         } = ws;
+        let range = |v: &[f64]| {
+            v.iter()
+                .take(n)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                    (lo.min(x), hi.max(x))
+                })
+        };
+        for k in 0..3 {
+            motion[k] = range(&chunk.velocity[k]);
+            motion[3 + k] = range(&chunk.rates[k]);
+        }
         let cap = *capacity;
         let required = &self.required;
         let lookup = |s: Signal| {
@@ -586,6 +599,11 @@ impl ModelStructure {
                 Some(z) => dst.copy_from_slice(z),
                 None => dst.fill(0.0),
             }
+            measured[a] = dst
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                    (lo.min(v), hi.max(v))
+                });
             for t in &self.known[a] {
                 apply_term(dst, t, false, -1.0, &lookup);
             }
@@ -1209,6 +1227,10 @@ pub struct Workspace {
     signals: Vec<f64>,
     columns: Vec<f64>,
     outputs: Vec<f64>,
+    /// Smallest and largest measured output per axis (before the known terms).
+    measured: [(f64, f64); 6],
+    /// Smallest and largest u, v, w, p, q, r.
+    motion: [(f64, f64); 6],
     capacity: usize,
     len: usize,
     n_columns: usize,
@@ -1250,6 +1272,17 @@ impl Workspace {
     /// Regressor column `j` of the last assembled chunk.
     pub fn column(&self, j: usize) -> &[f64] {
         &self.columns[j * self.capacity..j * self.capacity + self.len]
+    }
+
+    /// Smallest and largest measured output of `axis` (before subtracting the known
+    /// terms) in the last assembled chunk.
+    pub fn measured_range(&self, axis: Axis) -> (f64, f64) {
+        self.measured[axis as usize]
+    }
+
+    /// Smallest and largest of u, v, w, p, q, r (index 0..6) in the last assembled chunk.
+    pub fn motion_range(&self, k: usize) -> (f64, f64) {
+        self.motion[k]
     }
 
     /// Measured output of `axis` minus the known terms, for the last assembled chunk.

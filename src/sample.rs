@@ -1,5 +1,5 @@
 //! The sample stream every reader and the simulator produce and the estimator consumes:
-//! the data contract of DESIGN.md in structure-of-arrays chunks.
+//! the data contract (`docs/data-contract.md`) in structure-of-arrays chunks.
 //!
 //! Units are SI, axes body FRD: velocity u, v, w (m/s, air-relative), rates p, q, r
 //! (rad/s), rotor speeds Ω_i (rad/s, positive), rotor accelerations Ω̇_i (rad/s²),

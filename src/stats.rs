@@ -1,4 +1,4 @@
-//! Mergeable sufficient statistics of one streaming pass (DESIGN.md, "Architecture").
+//! Mergeable sufficient statistics of one streaming pass.
 //!
 //! The [`Accumulator`] holds, for the augmented data matrix A = [X | Z] (every regressor
 //! column of a [`ModelStructure`] followed by the six known-term-corrected outputs):
@@ -11,7 +11,10 @@
 //!   equations);
 //! - per-column minimum and maximum and per-output mean and centred sum of squares
 //!   (Chan et al.'s pairwise update), for the centred R² and NRMSE;
-//! - the sample count.
+//! - the sample count;
+//! - the number of distinct regressor rows (states) seen, counted exactly up to
+//!   [`DISTINCT_ROWS_CAP`]: a log of one repeated state, or of fewer distinct states than
+//!   parameters, cannot support a fit however many samples it has.
 //!
 //! Columns that are constant multiples of another column (e.g. `u*dt` of F_x and
 //! `h*u*dt` of M_y) are folded in once: the factor is kept over the q distinct column
@@ -28,6 +31,8 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::qr::no_pivoting::factor::{
     qr_in_place, qr_in_place_scratch, recommended_block_size,
 };
+use std::hash::{DefaultHasher, Hasher};
+
 use faer::{Mat, Par};
 
 use crate::model::{ModelError, ModelStructure, Workspace};
@@ -76,6 +81,25 @@ pub struct Accumulator {
     out_mean: [f64; 6],
     out_m2: [f64; 6],
     labels: Vec<String>,
+    /// Sorted hashes of the distinct regressor rows seen, at most [`DISTINCT_ROWS_CAP`].
+    distinct: Vec<u64>,
+    /// Smallest and largest measured output per axis (before the known terms).
+    measured: [(f64, f64); 6],
+    /// Smallest and largest u, v, w, p, q, r.
+    motion: [(f64, f64); 6],
+}
+
+/// Distinct regressor rows counted exactly; beyond this many the count saturates (more
+/// than any model structure has parameters).
+pub const DISTINCT_ROWS_CAP: usize = 1024;
+
+/// Inserts `h` into the sorted set `set` unless it is there or the set is full.
+fn insert_distinct(set: &mut Vec<u64>, h: u64) {
+    if set.len() < DISTINCT_ROWS_CAP
+        && let Err(at) = set.binary_search(&h)
+    {
+        set.insert(at, h);
+    }
 }
 
 /// Scratch buffers for folding chunks into an [`Accumulator`].
@@ -120,6 +144,9 @@ impl Accumulator {
             out_mean: [0.0; 6],
             out_m2: [0.0; 6],
             labels,
+            distinct: Vec::new(),
+            measured: [(f64::INFINITY, f64::NEG_INFINITY); 6],
+            motion: [(f64::INFINITY, f64::NEG_INFINITY); 6],
         }
     }
 
@@ -166,6 +193,16 @@ impl Accumulator {
             let m2 = z.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
             self.combine_moments(a, n as u64, mean, m2);
         }
+        self.count_distinct_rows(ws);
+        for axis in Axis::ALL {
+            let (lo, hi) = ws.measured_range(axis);
+            let m = &mut self.measured[axis as usize];
+            *m = (m.0.min(lo), m.1.max(hi));
+        }
+        for (k, m) in self.motion.iter_mut().enumerate() {
+            let (lo, hi) = ws.motion_range(k);
+            *m = (m.0.min(lo), m.1.max(hi));
+        }
         STACKED.with_borrow_mut(|s| {
             s.a.resize_with(q + n, q, |_, _| 0.0);
             for j in 0..q {
@@ -199,6 +236,17 @@ impl Accumulator {
         for a in 0..6 {
             self.combine_moments(a, other.count, other.out_mean[a], other.out_m2[a]);
         }
+        for &h in &other.distinct {
+            insert_distinct(&mut self.distinct, h);
+        }
+        for (m, o) in self
+            .measured
+            .iter_mut()
+            .zip(&other.measured)
+            .chain(self.motion.iter_mut().zip(&other.motion))
+        {
+            *m = (m.0.min(o.0), m.1.max(o.1));
+        }
         STACKED.with_borrow_mut(|s| {
             s.a.resize_with(2 * q, q, |_, _| 0.0);
             for j in 0..q {
@@ -231,6 +279,49 @@ impl Accumulator {
     /// Number of samples accumulated.
     pub fn count(&self) -> u64 {
         self.count
+    }
+
+    /// Distinct regressor rows (states as the model sees them) among the samples:
+    /// `Some(d)` when exact, `None` when at least [`DISTINCT_ROWS_CAP`] were seen. Rows
+    /// are compared bit for bit (−0 = +0) through a 64-bit hash. After
+    /// [`select`](Self::select) this is the count over the parent's columns, an upper
+    /// bound for the subset.
+    pub fn distinct_rows(&self) -> Option<usize> {
+        (self.distinct.len() < DISTINCT_ROWS_CAP).then_some(self.distinct.len())
+    }
+
+    /// Smallest and largest measured output of `axis` (as logged, before subtracting
+    /// the known terms).
+    pub fn measured_range(&self, axis: Axis) -> (f64, f64) {
+        self.measured[axis as usize]
+    }
+
+    /// Smallest and largest of the motion variable `k` (0..6: u, v, w, p, q, r).
+    pub fn motion_range(&self, k: usize) -> (f64, f64) {
+        self.motion[k]
+    }
+
+    /// Hashes the regressor rows of the assembled chunk into the distinct-row set until
+    /// it is full (then nothing more is hashed).
+    fn count_distinct_rows(&mut self, ws: &Workspace) {
+        if self.distinct.len() >= DISTINCT_ROWS_CAP {
+            return;
+        }
+        let cols: Vec<&[f64]> = (0..self.rows())
+            .filter(|&u| self.representative[u] < self.p)
+            .map(|u| self.data_column(ws, u))
+            .collect();
+        for i in 0..ws.len() {
+            let mut h = DefaultHasher::new();
+            for c in &cols {
+                // + 0.0 maps −0 to +0.
+                h.write_u64((c[i] + 0.0).to_bits());
+            }
+            insert_distinct(&mut self.distinct, h.finish());
+            if self.distinct.len() >= DISTINCT_ROWS_CAP {
+                return;
+            }
+        }
     }
 
     /// Index in the augmented matrix of the output column of `axis` (p + axis).
@@ -465,6 +556,9 @@ impl Accumulator {
             out_mean: self.out_mean,
             out_m2: self.out_m2,
             labels: keep.iter().map(|&j| self.labels[j].clone()).collect(),
+            distinct: self.distinct.clone(),
+            measured: self.measured,
+            motion: self.motion,
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Vehicle geometry and mass properties (seed §2 and §4.2).
 //!
-//! A [`Vehicle`] is read from the TOML format of DESIGN.md (an explicit rotor table) or
-//! built from a [`Preset`]. Construction checks physical validity (positive mass,
+//! A [`Vehicle`] is read from the TOML format of `docs/vehicle-file.md` (an explicit
+//! rotor table or a preset) or built from a [`Preset`]. Construction checks physical validity (positive mass,
 //! symmetric positive-definite inertia, …) and Assumption 2 of the seed (even rotor count
 //! ≥ 4, alternating spin, equal arms, equal interior angles, symmetry about both body axes,
 //! coplanar rotors at one height), then classifies the layout per Definition 1.
@@ -244,7 +244,7 @@ pub struct Vehicle {
     tolerance: f64,
 }
 
-/// The vehicle TOML layout (DESIGN.md "Vehicle file"), unchecked. Embedded as is in
+/// The vehicle TOML layout (`docs/vehicle-file.md`), unchecked. Embedded as is in
 /// identified-model files; [`Vehicle::from_definition`] checks it.
 #[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]

@@ -5,7 +5,7 @@
 mod estimate_common;
 
 use estimate_common::*;
-use mrsysid::estimate::{FitOptions, evaluate, fit};
+use mrsysid::estimate::{EstimateError, FitOptions, evaluate, fit};
 
 /// Noise-free Eq. 22 data: every estimate (per-axis OLS and MMR) equals θ to 1e-9
 /// relative. The data are exact up to rounding (~1e-16 relative) and the equilibrated
@@ -37,6 +37,13 @@ fn exact_data_recovers_theta() {
     for m in f.metrics {
         assert!(m.nrmse < 1e-10 && m.tic < 1e-10, "{m:?}");
     }
+    // Zero residuals are not information about the noise: σ, t and P are withheld.
+    let why = f
+        .mmr
+        .inference_withheld
+        .as_deref()
+        .expect("inference withheld");
+    assert!(why.starts_with("the model interpolates the data"), "{why}");
 }
 
 /// One noisy realisation (N = 5000, noise of known 6 × 6 covariance): every MMR estimate
@@ -57,6 +64,7 @@ fn noisy_estimates_lie_within_three_sigma() {
     let acc = accumulate(&s, &chunks(&samples, 4, 1024));
     let f = fit(&s, &acc, &FitOptions::default()).unwrap();
     assert_eq!(f.mmr.dof, (n - s.params.len()) as f64);
+    assert_eq!(f.mmr.inference_withheld, None);
     for (e, &p) in f.mmr.parameters.iter().zip(&f.mmr.param_index) {
         let z = (e.estimate - theta[p]) / e.std_error;
         assert!(z.abs() < 3.0, "{}: {z}", e.name);
@@ -152,4 +160,40 @@ fn tiny_p_values_are_resolved() {
         .find(|e| e.t.abs() > 9.0 && e.t.abs() < 40.0)
         .expect("a strongly significant parameter");
     assert!(strong.p_value > 0.0 && strong.p_value < 1e-17, "{strong:?}");
+}
+
+/// Data that cannot support a fit are refused with the reason, never fitted and never a
+/// panic: one repeated state (every regressor constant), and outputs that are all zero
+/// on varied states (whose fit once gave t = 0/0, which panicked inside statrs).
+#[test]
+fn data_that_cannot_support_a_fit_are_refused_without_panicking() {
+    let v = quad_x();
+    let s = structure(&v);
+    let theta = true_theta(&s, &v);
+    let mut samples = random_samples(&mut rng(7), 500, 4);
+    let first = samples[0].clone();
+    samples.iter_mut().for_each(|smp| *smp = first.clone());
+    set_outputs(&s, &theta, &mut samples, None);
+    let acc = accumulate(&s, &chunks(&samples, 4, 128));
+    assert_eq!(acc.distinct_rows(), Some(1));
+    match fit(&s, &acc, &FitOptions::default()) {
+        Err(e @ EstimateError::Unsupported { .. }) => {
+            let m = e.to_string();
+            assert!(m.contains("all 500 samples hold the same state"), "{m}");
+            assert!(m.contains("no excitation") && m.contains("C_T0"), "{m}");
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+
+    let mut samples = random_samples(&mut rng(8), 500, 4);
+    samples.iter_mut().for_each(|smp| smp.wrench = [0.0; 6]);
+    let acc = accumulate(&s, &chunks(&samples, 4, 128));
+    assert_eq!(acc.distinct_rows(), Some(500));
+    match fit(&s, &acc, &FitOptions::default()) {
+        Err(e @ EstimateError::Unsupported { .. }) => {
+            let m = e.to_string();
+            assert!(m.contains("output Fx is 0 N in all 500 samples"), "{m}");
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
 }

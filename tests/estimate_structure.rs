@@ -457,6 +457,17 @@ fn unidentifiable_parameters_are_refused_or_dropped() {
         assert!(dropped.contains(&name), "{name} not dropped: {dropped:?}");
         assert!(f.mmr.parameters.iter().all(|e| e.name != name));
     }
+    // A term dropped because its own regressor is zero is aliased with nothing (not
+    // "C_H_mub not separable from C_H_mub") and says why.
+    let h = mmr.dropped.iter().find(|d| d.name == "C_H_mub").unwrap();
+    assert!(h.aliased_with.is_empty(), "{h:?}");
+    assert_eq!(
+        h.cause.as_deref(),
+        Some("u = v = 0 throughout: no in-plane motion")
+    );
+    for d in f.identifiability.iter().flat_map(|c| &c.dropped) {
+        assert!(!d.aliased_with.contains(&d.name), "{d:?}");
+    }
     let kept: Vec<f64> = f.mmr.param_index.iter().map(|&p| theta[p]).collect();
     let got: Vec<f64> = f.mmr.parameters.iter().map(|e| e.estimate).collect();
     assert!(max_rel(&got, &kept) < 1e-9);

@@ -8,6 +8,8 @@ use serde::Serialize;
 
 use super::lstsq::{self, LeastSquares};
 use super::{EstimateError, FitOptions, UnidentifiablePolicy};
+use crate::model::{ModelStructure, Signal};
+use crate::stats::Accumulator;
 
 /// Conditioning of one least-squares problem (a per-axis OLS or the MMR).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -29,8 +31,12 @@ pub struct ProblemConditioning {
 pub struct DroppedTerm {
     /// The removed term.
     pub name: String,
-    /// All terms with weight ≥ 0.1 in the near-null singular directions at the time.
+    /// The other terms with weight ≥ 0.1 in the near-null singular directions at the
+    /// time (empty when the term's own regressor is zero in every sample).
     pub aliased_with: Vec<String>,
+    /// Why it cannot be identified when it is aliased with nothing: its regressor is
+    /// zero in every sample, e.g. `u = v = 0 throughout: no in-plane motion`.
+    pub cause: Option<String>,
     /// Condition number of the equilibrated design before dropping.
     pub condition_number: f64,
 }
@@ -38,16 +44,34 @@ pub struct DroppedTerm {
 /// Solves min ‖X θ − z‖ over the columns of `x` named `names`. When the equilibrated
 /// design is numerically singular, either refuses (error naming the involved terms) or
 /// drops the term with the largest weight in the weakest direction and retries, per
-/// `options`. Returns the solution, the indices of the kept columns and the report.
+/// `options`. A term dropped alone (its column is zero) gets `zero_cause(column)` as its
+/// cause. Returns the solution, the indices of the kept columns and the report.
 pub(crate) fn solve_identifiable(
     problem: &str,
     x: &Mat<f64>,
     z: &[f64],
     names: &[String],
     options: &FitOptions,
+    zero_cause: &dyn Fn(usize) -> String,
 ) -> Result<(LeastSquares, Vec<usize>, ProblemConditioning), EstimateError> {
     let mut kept: Vec<usize> = (0..x.ncols()).collect();
     let mut dropped = Vec::new();
+    if options.unidentifiable == UnidentifiablePolicy::Drop {
+        // A regressor that is zero in every sample is dropped first, with its cause: it
+        // is not "aliased" with the other zero columns, it carries nothing.
+        kept.retain(|&j| {
+            let zero = x.col(j).norm_l2() == 0.0;
+            if zero {
+                dropped.push(DroppedTerm {
+                    name: names[j].clone(),
+                    aliased_with: Vec::new(),
+                    cause: Some(zero_cause(j)),
+                    condition_number: f64::INFINITY,
+                });
+            }
+            !zero
+        });
+    }
     loop {
         if kept.is_empty() {
             // Every term was dropped: the model of this problem is empty.
@@ -94,14 +118,85 @@ pub(crate) fn solve_identifiable(
                         condition_number: c.condition_number(),
                     });
                 }
-                let worst = c.worst().expect("non-empty design");
+                // A rank-deficient design has at least one column, so a weakest direction.
+                let worst = c.worst().unwrap_or(0);
+                let name = names[kept[worst]].clone();
+                let aliased_with: Vec<String> =
+                    involved.into_iter().filter(|n| *n != name).collect();
+                let cause = aliased_with.is_empty().then(|| zero_cause(kept[worst]));
                 dropped.push(DroppedTerm {
-                    name: names[kept[worst]].clone(),
-                    aliased_with: involved,
+                    name,
+                    aliased_with,
+                    cause,
                     condition_number: c.condition_number(),
                 });
                 kept.remove(worst);
             }
         }
     }
+}
+
+/// Motion variables u, v, w, p, q, r, in [`Accumulator::motion_range`] order.
+const MOTION: [&str; 6] = ["u", "v", "w", "p", "q", "r"];
+
+/// The motion variables (indices into [`MOTION`]) all of which being zero makes `signal`
+/// zero (V_h = 0 needs u = v = 0).
+fn motion_of(signal: Signal) -> &'static [usize] {
+    use Signal::*;
+    match signal {
+        U | AbsU => &[0],
+        V | AbsV => &[1],
+        Vh | UOverVh | VOverVh => &[0, 1],
+        W | AbsW => &[2],
+        P => &[3],
+        Q => &[4],
+        R => &[5],
+        _ => &[],
+    }
+}
+
+/// Why the regressor columns `columns` of `structure` are zero in every sample of
+/// `acc`: when every term has a factor whose motion variables were zero throughout
+/// (from the logged ranges), those variables and what motion was absent
+/// (`u = v = 0 throughout: no in-plane motion`); else the columns themselves.
+pub(crate) fn zero_column_cause(
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    columns: &[usize],
+) -> String {
+    let zero = |k: usize| acc.motion_range(k) == (0.0, 0.0);
+    let mut vars: Vec<usize> = Vec::new();
+    let explained = columns.iter().all(|&c| {
+        structure.columns[c].terms.iter().all(|t| {
+            let cause = t
+                .factors
+                .iter()
+                .map(|&f| motion_of(f))
+                .find(|m| !m.is_empty() && m.iter().all(|&k| zero(k)));
+            if let Some(m) = cause {
+                vars.extend(m);
+            }
+            cause.is_some()
+        })
+    });
+    if !explained || vars.is_empty() {
+        let labels: Vec<&str> = columns
+            .iter()
+            .map(|&c| structure.columns[c].label.as_str())
+            .collect();
+        return format!("regressor {} is zero in every sample", labels.join(", "));
+    }
+    vars.sort_unstable();
+    vars.dedup();
+    let what = if vars.iter().all(|&k| k < 2) {
+        "no in-plane motion"
+    } else if vars == [2] {
+        "no vertical motion"
+    } else if vars.iter().all(|&k| k >= 3) {
+        "no rotation"
+    } else {
+        "no excitation"
+    };
+    let names: Vec<&str> = vars.iter().map(|&k| MOTION[k]).collect();
+    format!("{} = 0 throughout: {what}", names.join(" = "))
 }

@@ -33,11 +33,22 @@ pub struct ParameterEstimate {
 }
 
 /// Two-sided P-value and 97.5 % quantile of Student's t with `dof` degrees of freedom.
+/// A t that is not a number (0/0: zero estimate with zero standard error) has no
+/// P-value (NaN); |t| = ∞ has P = 0. statrs is never called with a non-finite argument
+/// (its regularised beta panics outside [0, 1]).
 pub(crate) fn t_test(t: f64, dof: f64) -> (f64, f64) {
-    match StudentsT::new(0.0, 1.0, dof) {
-        Ok(d) => (2.0 * d.sf(t.abs()), t_quantile_975(&d, dof)),
-        Err(_) => (f64::NAN, f64::NAN),
-    }
+    let d = match StudentsT::new(0.0, 1.0, dof) {
+        Ok(d) if dof.is_finite() => d,
+        _ => return (f64::NAN, f64::NAN),
+    };
+    let p = if t.is_nan() {
+        f64::NAN
+    } else if t.is_infinite() {
+        0.0
+    } else {
+        2.0 * d.sf(t.abs())
+    };
+    (p, t_quantile_975(&d, dof))
 }
 
 /// Degrees of freedom above which the t quantile comes from its expansion in 1/ν:
@@ -243,5 +254,19 @@ mod tests {
         let (p, q) = t_test(3.0, 1.6e7);
         assert!((q - 1.959_963_984_540_054).abs() < 1e-6, "{q}");
         assert!((p - 2.699_796_063_260_2e-3).abs() < 1e-8, "{p}");
+    }
+
+    #[test]
+    fn non_finite_t_and_dof_give_nan_not_a_panic() {
+        // 0/0 (zero estimate, zero standard error) once reached statrs' beta function.
+        let zero = 0.0_f64;
+        let (p, q) = t_test(zero / zero, 10.0);
+        assert!(p.is_nan());
+        assert!((q - 2.228_139).abs() < 1e-6, "{q}");
+        assert_eq!(t_test(f64::INFINITY, 10.0).0, 0.0);
+        assert_eq!(t_test(f64::NEG_INFINITY, 10.0).0, 0.0);
+        assert!(t_test(1.0, f64::NAN).0.is_nan());
+        assert!(t_test(1.0, 0.0).0.is_nan());
+        assert!(t_test(1.0, f64::INFINITY).0.is_nan());
     }
 }

@@ -12,7 +12,7 @@
 
 use faer::Mat;
 
-use super::identifiability::{ProblemConditioning, solve_identifiable};
+use super::identifiability::{ProblemConditioning, solve_identifiable, zero_column_cause};
 use super::lstsq::LeastSquares;
 use super::{EstimateError, FitOptions};
 use crate::model::ModelStructure;
@@ -106,7 +106,13 @@ pub(crate) fn solve(
         }
     }
     let names: Vec<String> = structure.params.iter().map(|p| p.name.clone()).collect();
-    let (ls, params, conditioning) = solve_identifiable("MMR", &g, &rhs, &names, options)?;
+    let cause = |p: usize| {
+        let cols: Vec<usize> = (0..structure.columns.len())
+            .filter(|&c| structure.columns[c].param == p)
+            .collect();
+        zero_column_cause(structure, acc, &cols)
+    };
+    let (ls, params, conditioning) = solve_identifiable("MMR", &g, &rhs, &names, options, &cause)?;
     Ok(MmrSolution {
         ls,
         params,

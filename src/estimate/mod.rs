@@ -96,6 +96,14 @@ pub enum EstimateError {
         /// Parameters to estimate.
         parameters: usize,
     },
+    /// The data hold too little information for any fit of the model: one repeated
+    /// state, fewer distinct states than parameters, or an output that never changes.
+    /// The message says why and names what cannot be identified.
+    #[error("the data cannot support a fit: {reason}")]
+    Unsupported {
+        /// Why, naming the parameters or outputs concerned.
+        reason: String,
+    },
     /// θ, structure and accumulator do not belong together.
     #[error(
         "shape mismatch: structure has {parameters} parameters and {columns} columns, θ has {theta} values, accumulator has {accumulated} columns"
@@ -135,6 +143,9 @@ pub struct MmrEstimates {
     pub covariance: Vec<f64>,
     /// Degrees of freedom of the t-tests, N − n_θ.
     pub dof: f64,
+    /// Why σ, t and P carry no information (the model interpolates the data, or the
+    /// residual covariance is singular), when they do not: they are then not reported.
+    pub inference_withheld: Option<String>,
     /// Weighting actually used.
     pub weighting: Weighting,
     /// R⁻¹ used as weight, row-major 6 × 6.
@@ -174,6 +185,7 @@ pub fn fit(
             accumulated: acc.n_columns(),
         });
     }
+    check_support(structure, acc)?;
     let n = acc.count() as f64;
     let mut axes = Vec::with_capacity(6);
     let mut identifiability = Vec::new();
@@ -222,6 +234,7 @@ pub fn fit(
         })
         .collect();
     let metrics = evaluate(structure, &theta, acc)?;
+    let inference_withheld = inference_withheld(acc, &axes, sol.weighting);
     Ok(Fit {
         samples: acc.count(),
         axes,
@@ -232,6 +245,7 @@ pub fn fit(
             theta,
             covariance: sol.ls.xtx_inv,
             dof,
+            inference_withheld,
             weighting: sol.weighting,
             weight: sol.weight,
         },
@@ -256,4 +270,123 @@ fn residual_covariance(acc: &Accumulator, axes: &[AxisFit]) -> [[f64; 6]; 6] {
         }
     }
     r
+}
+
+/// Names of `params` (indices into `structure.params`), comma-separated.
+fn param_names(structure: &ModelStructure, params: impl IntoIterator<Item = usize>) -> String {
+    params
+        .into_iter()
+        .map(|p| structure.params[p].name.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Refuses data that cannot support any fit of `structure`: a single repeated state
+/// (every regressor constant, so no excitation), fewer distinct states than parameters
+/// (the model interpolates them and the residual is not information), or an output
+/// that is constant while regressors of its axis vary (e.g. a moment logged as all
+/// zeros).
+fn check_support(structure: &ModelStructure, acc: &Accumulator) -> Result<(), EstimateError> {
+    let n_theta = structure.params.len();
+    let all = || param_names(structure, 0..n_theta);
+    match acc.distinct_rows() {
+        Some(0) => {
+            return Err(EstimateError::TooFewSamples {
+                samples: acc.count(),
+                parameters: n_theta,
+            });
+        }
+        Some(1) => {
+            return Err(EstimateError::Unsupported {
+                reason: format!(
+                    "all {} samples hold the same state (one distinct state: velocity, rates \
+                     and rotor speeds never change), so there is no excitation and none of \
+                     the {n_theta} parameters can be identified ({})",
+                    acc.count(),
+                    all()
+                ),
+            });
+        }
+        Some(d) if d < n_theta => {
+            return Err(EstimateError::Unsupported {
+                reason: format!(
+                    "the {} samples hold only {d} distinct states, fewer than the {n_theta} \
+                     parameters of the model, so no axis can determine more than {d} \
+                     combinations of its parameters and the fit would interpolate the \
+                     data; too little excitation to identify {}",
+                    acc.count(),
+                    all()
+                ),
+            });
+        }
+        _ => {}
+    }
+    for axis in Axis::ALL {
+        let (lo, hi) = acc.measured_range(axis);
+        // Constant where the model says it should respond: some regressor of the axis
+        // varies. (With no excitation of the axis at all, e.g. F_x in pure vertical
+        // flight, its terms are dropped as unidentifiable instead.)
+        let excited = structure
+            .axis_columns(axis)
+            .any(|c| acc.min(c) != acc.max(c));
+        if lo == hi && excited {
+            let only_here: Vec<usize> = (0..n_theta)
+                .filter(|&p| {
+                    let mut cols = structure.columns.iter().filter(|c| c.param == p);
+                    cols.clone().next().is_some() && cols.all(|c| c.axis == axis)
+                })
+                .collect();
+            let lost = if only_here.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; the parameters only {axis} determines cannot be identified ({})",
+                    param_names(structure, only_here)
+                )
+            };
+            return Err(EstimateError::Unsupported {
+                reason: format!(
+                    "output {axis} is {lo} {} in all {} samples: an output that never \
+                     changes carries no information (was it logged?){lost}",
+                    axis.unit(),
+                    acc.count()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Relative residual level at or below which a fit is exact to rounding: the model
+/// interpolates the data (no real log comes within orders of magnitude of it).
+const INTERPOLATION_LEVEL: f64 = 1e-9;
+
+/// Why σ, t and P of the MMR carry no information, if they do not: some axis is fitted
+/// to rounding level (RMS residual ≤ [`INTERPOLATION_LEVEL`] × RMS output: zero residuals
+/// are not information about the noise), or R had to be replaced by its diagonal.
+fn inference_withheld(acc: &Accumulator, axes: &[AxisFit], weighting: Weighting) -> Option<String> {
+    let exact: Vec<&str> = axes
+        .iter()
+        .filter(|a| {
+            let zc = acc.output_index(a.ols.axis);
+            a.ols.sse <= INTERPOLATION_LEVEL.powi(2) * acc.cross(zc, zc)
+        })
+        .map(|a| a.ols.axis.name())
+        .collect();
+    if !exact.is_empty() {
+        Some(format!(
+            "the model interpolates the data: the residuals of {} are at rounding level \
+             (RMS at most {INTERPOLATION_LEVEL:e} of the output's), so σ, t and P carry no \
+             information",
+            exact.join(", ")
+        ))
+    } else if weighting == Weighting::Diagonal {
+        Some(
+            "the residual covariance R of the per-axis fits is singular, so the residuals \
+             of some axes are exact combinations of others; σ, t and P carry no information"
+                .into(),
+        )
+    } else {
+        None
+    }
 }

@@ -5,7 +5,7 @@
 use faer::Mat;
 use serde::Serialize;
 
-use super::identifiability::{ProblemConditioning, solve_identifiable};
+use super::identifiability::{ProblemConditioning, solve_identifiable, zero_column_cause};
 use super::{EstimateError, FitOptions};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
@@ -80,7 +80,9 @@ pub fn axis_ols(
         });
     }
     let (x, z) = compressed(acc, &cols, axis);
-    let (ls, kept, report) = solve_identifiable(&format!("OLS {axis}"), &x, &z, &names, options)?;
+    let cause = |j: usize| zero_column_cause(structure, acc, &[cols[j]]);
+    let (ls, kept, report) =
+        solve_identifiable(&format!("OLS {axis}"), &x, &z, &names, options, &cause)?;
     let k = kept.len();
     let dof = n - k as f64;
     let residual_variance = ls.sse / dof;

@@ -448,9 +448,9 @@ fn parse_text(text: &str) -> Result<f64, String> {
     number.parse::<f64>().map_err(|_| text.to_string())
 }
 
-/// Writes samples as a DESIGN.md contract CSV (header `t,u,v,w,p,q,r,omega_1..N,
-/// [omega_dot_1..N,]fx,fy,fz,mx,my,mz[,height][,qw,qx,qy,qz]`), shortest round-trip
-/// float formatting so reading back gives identical values.
+/// Writes samples as a contract CSV (`docs/data-contract.md`; header
+/// `t,u,v,w,p,q,r,omega_1..N,[omega_dot_1..N,]fx,fy,fz,mx,my,mz[,height][,qw,qx,qy,qz]`),
+/// shortest round-trip float formatting so reading back gives identical values.
 pub fn write_contract_csv<'a>(
     path: &Path,
     chunks: impl IntoIterator<Item = &'a crate::sample::SampleChunk>,

@@ -12,7 +12,8 @@ pub enum Location {
     File,
     /// A 1-based text line of a CSV or TOML file.
     Line(u64),
-    /// A 0-based message index of an MCAP file (in file order).
+    /// A 0-based message index of an MCAP file, in the order read (log-time order
+    /// through the chunk indexes when the file has them, else file order).
     Record(u64),
 }
 

@@ -16,7 +16,8 @@
 //! unit = "rad/s"
 //! ```
 //!
-//! Without a mapping file the DESIGN.md contract header is mapped by [`contract_mapping`].
+//! The format is documented in `docs/mapping.md`. Without a mapping file the contract
+//! header (`docs/data-contract.md`) is mapped by [`contract_mapping`].
 
 use std::collections::HashSet;
 use std::path::Path;
@@ -436,7 +437,7 @@ fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), String> {
     Ok(())
 }
 
-/// The mapping of a DESIGN.md contract CSV with header `header`: SI units, FRD/NED,
+/// The mapping of a contract CSV (`docs/data-contract.md`) with header `header`: SI units, FRD/NED,
 /// `omega_1..omega_N` in vehicle order, optional `ax..`, `height`, `qw..`,
 /// `omega_dot_1..`. Errors name the file (line 1) and the column concerned.
 pub fn contract_mapping(header: &[&str], rotors: usize, file: &str) -> Result<Mapping, IoError> {

@@ -1,17 +1,26 @@
-//! MCAP source: messages read in file order with the `mcap` crate's streaming
-//! (sans-I/O) linear reader, JSON payloads decoded by field path, asynchronous topics
-//! aligned on the time base topic by linear interpolation when the bracketing messages
-//! are at most `max_gap` apart. A base sample that cannot be aligned is reported as a
-//! sample-level error (dropped and counted, never bridged), so the time step it leaves
-//! splits the log into segments.
+//! MCAP source: messages read in log-time order, JSON or ROS 2 CDR payloads decoded by
+//! field path, asynchronous topics aligned on the time base topic by linear
+//! interpolation when the bracketing messages are at most `max_gap` apart. A base sample
+//! that cannot be aligned is reported as a sample-level error (dropped and counted,
+//! never bridged), so the time step it leaves splits the log into segments.
+//!
+//! MCAP does not require messages to be stored in log-time order (a recorder may write
+//! topics in blocks; merged files interleave chunks). When the file's summary has chunk
+//! indexes, messages are read in log-time order through them with the `mcap` crate's
+//! sans-I/O indexed reader, which holds only the chunks overlapping in time at once (as
+//! the mcap tooling and Foxglove read). Without an index the file is read in file order
+//! by the streaming linear reader, and a message more than `max_gap` earlier than one
+//! already read is an error saying the file must be indexed or sorted.
 
 use std::collections::{HashMap, VecDeque};
 use std::fs::File;
-use std::io::Read;
+use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
-use mcap::records::Record;
-use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
+use mcap::records::{MessageHeader, Record};
+use mcap::sans_io::indexed_reader::{IndexedReadEvent, IndexedReader, IndexedReaderOptions};
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
 use serde_json::Value;
 
 use super::RowSource;
@@ -98,11 +107,90 @@ struct Topic {
     seen: bool,
 }
 
+/// How messages are read: log-time order through chunk indexes, or file order.
+enum Order {
+    /// Through the summary's chunk indexes; `buffer` holds one compressed chunk.
+    LogTime {
+        reader: Box<IndexedReader>,
+        buffer: Vec<u8>,
+    },
+    /// Record by record in file order (no summary or no chunk index).
+    File(Box<LinearReader>),
+}
+
+/// The file's summary (channels, schemas, chunk indexes) when it has one that is
+/// readable, has chunk indexes and names every topic in `topics`; `None` otherwise (read
+/// in file order then). The file position is left at the start.
+fn indexed_summary(handle: &mut File, topics: &[Topic]) -> Result<Option<mcap::Summary>, String> {
+    let size = handle.metadata().map_err(|e| e.to_string())?.len();
+    let mut reader = SummaryReader::new_with_options(
+        SummaryReaderOptions::default()
+            .with_file_size(size)
+            .with_record_length_limit(MAX_RECORD_BYTES),
+    );
+    let mut readable = true;
+    while let Some(event) = reader.next_event() {
+        let done = match event {
+            Ok(SummaryReadEvent::ReadRequest(need)) => match handle.read(reader.insert(need)) {
+                Ok(n) => {
+                    reader.notify_read(n);
+                    false
+                }
+                Err(_) => true,
+            },
+            Ok(SummaryReadEvent::SeekRequest(to)) => match handle.seek(to) {
+                Ok(pos) => {
+                    reader.notify_seeked(pos);
+                    false
+                }
+                Err(_) => true,
+            },
+            // A damaged summary: the file-order reader reports what is wrong.
+            Err(_) => true,
+        };
+        if done {
+            readable = false;
+            break;
+        }
+    }
+    handle.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
+    let summary = if readable { reader.finish() } else { None };
+    Ok(summary.filter(|s| {
+        !s.chunk_indexes.is_empty()
+            && topics
+                .iter()
+                .all(|t| s.channels.values().any(|c| c.topic == t.name))
+    }))
+}
+
+/// Checks the start of the file (magic and header record) with the linear reader, as a
+/// file-order read would: reading through the index skips it.
+fn check_start(handle: &mut File) -> Result<(), String> {
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
+    );
+    let result = loop {
+        match reader.next_event() {
+            None => break Ok(()),
+            Some(Err(e)) => break Err(format!("MCAP: {e}")),
+            Some(Ok(LinearReadEvent::Record { .. })) => break Ok(()),
+            Some(Ok(LinearReadEvent::ReadRequest(need))) => {
+                match handle.read(reader.insert(need)) {
+                    Ok(n) => reader.notify_read(n),
+                    Err(e) => break Err(e.to_string()),
+                }
+            }
+        }
+    };
+    handle.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
+    result
+}
+
 /// Streaming MCAP source; see the module docs.
 pub struct McapSource {
     file: String,
     handle: File,
-    reader: LinearReader,
+    order: Order,
     channel_topic: HashMap<u16, Option<usize>>,
     /// Schemas by id: (name, encoding, text).
     schemas: HashMap<u16, (String, String, Vec<u8>)>,
@@ -124,7 +212,7 @@ impl McapSource {
         max_gap: f64,
     ) -> Result<(Self, SlotLayout), IoError> {
         let layout = SlotLayout::resolve(mapping, rotors, file, true)?;
-        let handle = File::open(path).map_err(|e| {
+        let mut handle = File::open(path).map_err(|e| {
             IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
         })?;
         let mut topics: Vec<Topic> = Vec::new();
@@ -211,13 +299,37 @@ impl McapSource {
                 None => time_field.clone(),
             };
         }
-        let source = Self {
+        let read_error = |m: String| IoError::new(file, Location::File, None, ErrorKind::Read(m));
+        let summary = indexed_summary(&mut handle, &topics).map_err(read_error)?;
+        let order = match &summary {
+            Some(summary) => {
+                check_start(&mut handle).map_err(|m| {
+                    IoError::new(file, Location::Record(0), None, ErrorKind::Format(m))
+                })?;
+                let options = IndexedReaderOptions::new()
+                    .include_topics(topics.iter().map(|t| t.name.clone()))
+                    .with_record_length_limit(MAX_RECORD_BYTES);
+                let reader = IndexedReader::new_with_options(summary, options).map_err(|e| {
+                    IoError::new(
+                        file,
+                        Location::File,
+                        None,
+                        ErrorKind::Format(format!("MCAP chunk index: {e}")),
+                    )
+                })?;
+                Order::LogTime {
+                    reader: Box::new(reader),
+                    buffer: Vec::new(),
+                }
+            }
+            None => Order::File(Box::new(LinearReader::new_with_options(
+                LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
+            ))),
+        };
+        let mut source = Self {
             file: file.to_string(),
             handle,
-            reader: LinearReader::new_with_options(
-                mcap::sans_io::linear_reader::LinearReaderOptions::default()
-                    .with_record_length_limit(MAX_RECORD_BYTES),
-            ),
+            order,
             channel_topic: HashMap::new(),
             schemas: HashMap::new(),
             topics,
@@ -227,7 +339,47 @@ impl McapSource {
             latest_time: f64::NEG_INFINITY,
             eof: false,
         };
+        if let Some(summary) = summary {
+            for (id, schema) in &summary.schemas {
+                source.schemas.insert(
+                    *id,
+                    (
+                        schema.name.clone(),
+                        schema.encoding.clone(),
+                        schema.data.to_vec(),
+                    ),
+                );
+            }
+            let mut channels: Vec<_> = summary.channels.values().collect();
+            channels.sort_by_key(|c| c.id);
+            for ch in channels {
+                source.add_channel(
+                    ch.id,
+                    &ch.topic,
+                    &ch.message_encoding,
+                    ch.schema.as_ref().map_or(0, |s| s.id),
+                )?;
+            }
+        }
         Ok((source, layout))
+    }
+
+    /// Registers channel `id` on `topic`, with its decoder when the topic is mapped.
+    fn add_channel(
+        &mut self,
+        id: u16,
+        topic: &str,
+        encoding: &str,
+        schema_id: u16,
+    ) -> Result<(), IoError> {
+        let mapped = self.topics.iter().position(|t| t.name == topic);
+        if let Some(t) = mapped {
+            let decoder = self.decoder_for(topic, encoding, schema_id)?;
+            self.topics[t].decoder = decoder;
+            self.topics[t].seen = true;
+        }
+        self.channel_topic.insert(id, mapped);
+        Ok(())
     }
 
     fn err(&self, loc: Location, field_path: Option<String>, kind: ErrorKind) -> IoError {
@@ -236,12 +388,71 @@ impl McapSource {
 
     /// Reads the next mapped message into its topic queue; false at end of file.
     fn read_message(&mut self) -> Result<bool, IoError> {
+        match self.order {
+            Order::LogTime { .. } => self.read_indexed(),
+            Order::File(_) => self.read_linear(),
+        }
+    }
+
+    fn read_error(&self, e: std::io::Error) -> IoError {
+        self.err(Location::File, None, ErrorKind::Read(e.to_string()))
+    }
+
+    /// The next mapped message in log-time order, through the chunk indexes.
+    fn read_indexed(&mut self) -> Result<bool, IoError> {
         loop {
-            let event = match self.reader.next_event() {
+            let Order::LogTime { reader, buffer } = &mut self.order else {
+                return Ok(false);
+            };
+            let (header, data) = match reader.next_event() {
                 None => return Ok(false),
                 Some(Err(e)) => {
+                    let index = self.message_index;
                     return Err(self.err(
-                        Location::Record(self.message_index),
+                        Location::Record(index),
+                        None,
+                        ErrorKind::Format(format!("MCAP: {e}")),
+                    ));
+                }
+                Some(Ok(IndexedReadEvent::Message { header, data })) => (header, data.to_vec()),
+                Some(Ok(IndexedReadEvent::ReadChunkRequest { offset, length })) => {
+                    buffer.resize(length, 0);
+                    let read = self
+                        .handle
+                        .seek(SeekFrom::Start(offset))
+                        .and_then(|_| self.handle.read_exact(buffer));
+                    if let Err(e) = read {
+                        return Err(self.read_error(e));
+                    }
+                    if let Err(e) = reader.insert_chunk_record_data(offset, buffer) {
+                        let index = self.message_index;
+                        return Err(self.err(
+                            Location::Record(index),
+                            None,
+                            ErrorKind::Format(format!("MCAP chunk at byte {offset}: {e}")),
+                        ));
+                    }
+                    continue;
+                }
+            };
+            if self.on_message(&header, &data)? {
+                return Ok(true);
+            }
+        }
+    }
+
+    /// The next mapped message in file order.
+    fn read_linear(&mut self) -> Result<bool, IoError> {
+        loop {
+            let Order::File(reader) = &mut self.order else {
+                return Ok(false);
+            };
+            let event = match reader.next_event() {
+                None => return Ok(false),
+                Some(Err(e)) => {
+                    let index = self.message_index;
+                    return Err(self.err(
+                        Location::Record(index),
                         None,
                         ErrorKind::Format(format!("MCAP: {e}")),
                     ));
@@ -250,15 +461,10 @@ impl McapSource {
             };
             let (opcode, data) = match event {
                 LinearReadEvent::ReadRequest(need) => {
-                    let n = self.handle.read(self.reader.insert(need)).map_err(|e| {
-                        IoError::new(
-                            &self.file,
-                            Location::File,
-                            None,
-                            ErrorKind::Read(e.to_string()),
-                        )
-                    })?;
-                    self.reader.notify_read(n);
+                    match self.handle.read(reader.insert(need)) {
+                        Ok(n) => reader.notify_read(n),
+                        Err(e) => return Err(self.read_error(e)),
+                    }
                     continue;
                 }
                 LinearReadEvent::Record { opcode, data } => (opcode, data.to_vec()),
@@ -277,32 +483,9 @@ impl McapSource {
                         .insert(header.id, (header.name, header.encoding, data.into_owned()));
                 }
                 Record::Channel(ch) => {
-                    let topic = self.topics.iter().position(|t| t.name == ch.topic);
-                    if let Some(t) = topic {
-                        let decoder = self.decoder_for(&ch)?;
-                        self.topics[t].decoder = decoder;
-                        self.topics[t].seen = true;
-                    }
-                    self.channel_topic.insert(ch.id, topic);
+                    self.add_channel(ch.id, &ch.topic, &ch.message_encoding, ch.schema_id)?;
                 }
-                Record::Message { header, data } => {
-                    let index = self.message_index;
-                    self.message_index += 1;
-                    let topic = match self.channel_topic.get(&header.channel_id) {
-                        Some(Some(t)) => *t,
-                        Some(None) => continue,
-                        None => {
-                            return Err(self.err(
-                                Location::Record(index),
-                                None,
-                                ErrorKind::Format(format!(
-                                    "message on unknown channel {}",
-                                    header.channel_id
-                                )),
-                            ));
-                        }
-                    };
-                    self.decode(topic, index, header.log_time, &data)?;
+                Record::Message { header, data } if self.on_message(&header, &data)? => {
                     return Ok(true);
                 }
                 _ => {}
@@ -310,15 +493,33 @@ impl McapSource {
         }
     }
 
-    fn decoder_for(&self, ch: &mcap::records::Channel) -> Result<Decoder, IoError> {
-        let fail = |m: String| self.err(Location::File, field(&ch.topic), ErrorKind::Format(m));
-        match ch.message_encoding.as_str() {
+    /// Decodes a message into its topic's queue: true when its channel is mapped.
+    fn on_message(&mut self, header: &MessageHeader, data: &[u8]) -> Result<bool, IoError> {
+        let index = self.message_index;
+        self.message_index += 1;
+        let topic = match self.channel_topic.get(&header.channel_id) {
+            Some(Some(t)) => *t,
+            Some(None) => return Ok(false),
+            None => {
+                return Err(self.err(
+                    Location::Record(index),
+                    None,
+                    ErrorKind::Format(format!("message on unknown channel {}", header.channel_id)),
+                ));
+            }
+        };
+        self.decode(topic, index, header.log_time, data)?;
+        Ok(true)
+    }
+
+    fn decoder_for(&self, topic: &str, encoding: &str, schema_id: u16) -> Result<Decoder, IoError> {
+        let fail = |m: String| self.err(Location::File, field(topic), ErrorKind::Format(m));
+        match encoding {
             "json" => Ok(Decoder::Json),
             "cdr" => {
-                let (name, encoding, text) = self.schemas.get(&ch.schema_id).ok_or_else(|| {
+                let (name, encoding, text) = self.schemas.get(&schema_id).ok_or_else(|| {
                     fail(format!(
-                        "CDR channel without schema (schema id {})",
-                        ch.schema_id
+                        "CDR channel without schema (schema id {schema_id})"
                     ))
                 })?;
                 if encoding != "ros2msg" {
@@ -392,6 +593,25 @@ impl McapSource {
                     ErrorKind::NotANumber(v.to_string()),
                 )
             })?);
+        }
+        if t < self.latest_time - self.max_gap {
+            let why = match self.order {
+                Order::LogTime { .. } => format!(
+                    "time t = {t} s is more than max_gap = {} s before t = {} s of a message \
+                     read earlier in log-time order: this topic's time field disagrees with \
+                     the message log times",
+                    self.max_gap, self.latest_time
+                ),
+                Order::File(_) => format!(
+                    "time t = {t} s is more than max_gap = {} s before t = {} s of a message \
+                     earlier in the file: the messages are not stored in log-time order and \
+                     the file has no chunk index to read them in order (write it with chunk \
+                     indexes, as the mcap and ROS 2 writers do by default, or in log-time \
+                     order)",
+                    self.max_gap, self.latest_time
+                ),
+            };
+            return Err(self.err(loc, field(&name), ErrorKind::Format(why)));
         }
         if t.is_finite() {
             self.latest_time = self.latest_time.max(t);

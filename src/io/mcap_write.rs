@@ -148,17 +148,57 @@ fn cdr_messages(c: &SampleChunk, k: usize, shape: Shape) -> [Vec<u8>; 3] {
     [state.finish(), rotors.finish(), wrench.finish()]
 }
 
-/// Writes `chunks` to `path` as MCAP in `encoding`. Optional signals (height, attitude,
-/// rotor accelerations) are written when the first chunk carries them; every chunk must
-/// then carry them too.
+/// How the messages are laid out in a written file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layout {
+    /// Each topic's messages as one block after the previous topic's (state, rotors,
+    /// wrench): valid MCAP, but not stored in log-time order, as a recorder that writes
+    /// topics in blocks leaves it. False: interleaved in log-time order.
+    pub topic_blocks: bool,
+    /// Messages in compressed chunks with chunk and message indexes in the summary (the
+    /// default of MCAP writers). False: unchunked messages, no index.
+    pub indexed: bool,
+    /// Uncompressed chunk size, bytes: small values give many chunks, overlapping in
+    /// time when `topic_blocks` is set.
+    pub chunk_size: u64,
+}
+
+impl Default for Layout {
+    /// Log-time order, indexed, the mcap crate's default chunk size.
+    fn default() -> Self {
+        Self {
+            topic_blocks: false,
+            indexed: true,
+            chunk_size: mcap::WriteOptions::DEFAULT_CHUNK_SIZE,
+        }
+    }
+}
+
+/// Writes `chunks` to `path` as MCAP in `encoding`, in log-time order with indexes.
+/// Optional signals (height, attitude, rotor accelerations) are written when the first
+/// chunk carries them; every chunk must then carry them too.
 pub fn write_samples<'a>(
     path: &Path,
     vehicle: &Vehicle,
     chunks: impl IntoIterator<Item = &'a SampleChunk>,
     encoding: Encoding,
 ) -> Result<(), WriteError> {
+    write_samples_laid_out(path, vehicle, chunks, encoding, Layout::default())
+}
+
+/// [`write_samples`] with the messages laid out as `layout` says.
+pub fn write_samples_laid_out<'a>(
+    path: &Path,
+    vehicle: &Vehicle,
+    chunks: impl IntoIterator<Item = &'a SampleChunk>,
+    encoding: Encoding,
+    layout: Layout,
+) -> Result<(), WriteError> {
     let file = File::create(path).map_err(mcap::McapError::from)?;
-    let mut w = mcap::Writer::new(BufWriter::new(file))?;
+    let options = mcap::WriteOptions::new()
+        .use_chunks(layout.indexed)
+        .chunk_size(Some(layout.chunk_size));
+    let mut w = options.create(BufWriter::new(file))?;
     let meta = BTreeMap::from([("vehicle".to_string(), vehicle.name.clone())]);
     let mut chunks = chunks.into_iter().peekable();
     let shape = chunks.peek().map_or(
@@ -188,6 +228,9 @@ pub fn write_samples<'a>(
         };
     }
     let mut sequence = 0u32;
+    // With topic blocks, the rotor and wrench messages wait here until the state block
+    // is written.
+    let mut held: [Vec<(mcap::records::MessageHeader, Vec<u8>)>; 2] = Default::default();
     for c in chunks {
         if c.rotor_count() != vehicle.rotor_count() {
             return Err(WriteError::Rotors {
@@ -211,17 +254,24 @@ pub fn write_samples<'a>(
                 Encoding::Json => json_messages(c, k),
                 Encoding::Cdr => cdr_messages(c, k, shape),
             };
-            for (id, msg) in ids.iter().zip(messages) {
+            for (k, (id, msg)) in ids.iter().zip(messages).enumerate() {
                 let header = mcap::records::MessageHeader {
                     channel_id: *id,
                     sequence,
                     log_time,
                     publish_time: log_time,
                 };
-                w.write_to_known_channel(&header, &msg)?;
+                if layout.topic_blocks && k > 0 {
+                    held[k - 1].push((header, msg));
+                } else {
+                    w.write_to_known_channel(&header, &msg)?;
+                }
                 sequence = sequence.wrapping_add(1);
             }
         }
+    }
+    for (header, msg) in held.iter().flatten() {
+        w.write_to_known_channel(header, msg)?;
     }
     w.finish()?;
     Ok(())

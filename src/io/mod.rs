@@ -1,5 +1,5 @@
 //! Log ingestion: contract and mapped CSV, MCAP (JSON and ROS 2 CDR), turned into the
-//! [`SampleChunk`] stream of the data contract (DESIGN.md "Data contract"), streaming in
+//! [`SampleChunk`] stream of the data contract (`docs/data-contract.md`), streaming in
 //! bounded memory.
 //!
 //! Pipeline per sample: a source (CSV row or time-aligned MCAP messages) fills the slot

@@ -34,6 +34,11 @@ pub struct Report {
     pub model: ModelOptions,
     /// Degrees of freedom of the t-tests (N − n_θ, N = fit samples).
     pub degrees_of_freedom: f64,
+    /// When set, why the parameters' `std`, `t` and `p` carry no information (the model
+    /// interpolates the data, or the residual covariance is singular); they are then
+    /// not printed and must not be read.
+    #[serde(default)]
+    pub inference_withheld: Option<String>,
     /// MMR estimates (seed Table 5).
     pub parameters: Vec<ParameterRow>,
     /// Parameters the data could not identify, dropped before the MMR.
@@ -267,8 +272,11 @@ pub struct DroppedRow {
     pub problem: String,
     /// Dropped term.
     pub name: String,
-    /// Terms it could not be separated from.
+    /// Other terms it could not be separated from.
     pub aliased_with: Vec<String>,
+    /// Why, when it is aliased with nothing (its regressor is zero in every sample).
+    #[serde(default)]
+    pub cause: Option<String>,
 }
 
 /// One row of seed Table 4.
@@ -395,6 +403,7 @@ impl Report {
             },
             model: structure.options,
             degrees_of_freedom: fit.mmr.dof,
+            inference_withheld: fit.mmr.inference_withheld.clone(),
             parameters: fit
                 .mmr
                 .parameters
@@ -417,6 +426,7 @@ impl Report {
                         problem: c.problem.clone(),
                         name: d.name.clone(),
                         aliased_with: d.aliased_with.clone(),
+                        cause: d.cause.clone(),
                     })
                 })
                 .collect(),

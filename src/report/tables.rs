@@ -298,11 +298,21 @@ fn p_value(p: f64) -> String {
 }
 
 fn parameter_table(out: &mut String, r: &Report) {
-    let _ = writeln!(
-        out,
-        "MMR parameter estimates (Table 5), t-tests with {} degrees of freedom",
-        r.degrees_of_freedom
-    );
+    match &r.inference_withheld {
+        None => {
+            let _ = writeln!(
+                out,
+                "MMR parameter estimates (Table 5), t-tests with {} degrees of freedom",
+                r.degrees_of_freedom
+            );
+        }
+        Some(why) => {
+            let _ = writeln!(
+                out,
+                "MMR parameter estimates (Table 5); std, t and P not reported: {why}"
+            );
+        }
+    }
     let _ = writeln!(
         out,
         "  {:<14} {:>7} {:>11} {:>11} {:>9} {:>10} {:>11}  unit",
@@ -311,19 +321,26 @@ fn parameter_table(out: &mut String, r: &Report) {
     for p in &r.parameters {
         let k = scale_exponent(p.estimate);
         let s = 10f64.powi(k);
+        let withheld = r.inference_withheld.is_some();
         let coloured = p
             .std_coloured
+            .filter(|_| !withheld)
             .map_or("-".to_string(), |c| format!("{:.4}", c * s));
+        let (std, t, pv) = if withheld {
+            ("-".to_string(), "-".to_string(), "-".to_string())
+        } else {
+            (
+                format!("{:.4}", p.std * s),
+                format!("{:.1}", p.t.abs()),
+                p_value(p.p),
+            )
+        };
         let _ = writeln!(
             out,
-            "  {:<14} {:>7} {:>11.4} {:>11.4} {:>9.1} {:>10} {:>11}  {}",
+            "  {:<14} {:>7} {:>11.4} {std:>11} {t:>9} {pv:>10} {coloured:>11}  {}",
             p.name,
             format!("x1e{k}"),
             p.estimate * s,
-            p.std * s,
-            p.t.abs(),
-            p_value(p.p),
-            coloured,
             p.unit
         );
     }
@@ -378,20 +395,22 @@ fn identifiability(out: &mut String, r: &Report) {
         let vif = c.max_vif.as_ref().map_or(String::new(), |(n, v)| {
             format!(", largest VIF {v:.3e} ({n})")
         });
-        let _ = writeln!(
-            out,
-            "  {:<7} condition number {:.3e}{vif}",
-            c.problem, c.condition_number
-        );
+        if c.max_vif.is_none() {
+            let _ = writeln!(out, "  {:<7} no columns left (all dropped)", c.problem);
+        } else {
+            let _ = writeln!(
+                out,
+                "  {:<7} condition number {:.3e}{vif}",
+                c.problem, c.condition_number
+            );
+        }
     }
     for d in &r.dropped_parameters {
-        let _ = writeln!(
-            out,
-            "  WARNING {}: dropped {} (not separable from {})",
-            d.problem,
-            d.name,
-            d.aliased_with.join(", ")
-        );
+        let why = match &d.cause {
+            Some(cause) if d.aliased_with.is_empty() => cause.clone(),
+            _ => format!("not separable from {}", d.aliased_with.join(", ")),
+        };
+        let _ = writeln!(out, "  WARNING {}: dropped {} ({why})", d.problem, d.name);
     }
     out.push('\n');
 }

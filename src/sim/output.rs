@@ -1,4 +1,4 @@
-//! The CSV data contract of DESIGN.md, written compactly and atomically.
+//! The CSV data contract (`docs/data-contract.md`), written compactly and atomically.
 //!
 //! Column order: `t,u,v,w,p,q,r,omega_1..omega_N`, then `fx,fy,fz,mx,my,mz` (unless the
 //! log is IMU-only), `omega_dot_1..omega_dot_N`, `ax,ay,az`, `height`, `qw,qx,qy,qz` when
