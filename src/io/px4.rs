@@ -70,7 +70,8 @@ pub fn rotors_from_parameters(params: &BTreeMap<String, f64>) -> Result<Vec<Px4R
 /// layout satisfies the seed's Assumption 2 (the vehicle loader refuses it otherwise).
 pub fn vehicle_skeleton(rotors: &[Px4Rotor], name: &str, log_name: &str) -> String {
     let n = rotors.len().max(1) as f64;
-    let hub_height = -rotors.iter().map(|r| r.z).sum::<f64>() / n;
+    // PX4 stores the parameters as f32: print them at f32 precision (+ 0.0 clears −0).
+    let hub_height = (-rotors.iter().map(|r| r.z).sum::<f64>() / n) as f32 + 0.0;
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -99,7 +100,7 @@ pub fn vehicle_skeleton(rotors: &[Px4Rotor], name: &str, log_name: &str) -> Stri
         let _ = writeln!(
             s,
             "\n[[rotors]]   # CA rotor {i}, KM = {}\nx = {}\ny = {}\nspin = {spin}",
-            r.km, r.x, r.y
+            r.km as f32, r.x as f32, r.y as f32
         );
     }
     let check = layout_check(rotors);
