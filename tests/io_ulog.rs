@@ -434,7 +434,20 @@ fn malformed_catalogue() {
         &mm,
         "small: field \"vehicle_acceleration\": topic not in the log (logged topics: s)".into(),
     );
-    // 17. Cyclic nested formats.
+    // 17. Mapped topic subscribed but without data.
+    let mut w = small_log();
+    w.format("e:uint64_t timestamp;double x;");
+    w.add(0, 9, "e");
+    let mut mm = m.clone();
+    mm.signals.force.as_mut().unwrap().topic = Some("e".into());
+    mm.signals.force.as_mut().unwrap().fields = vec!["x".into(), "x".into(), "x".into()];
+    push(
+        "no-data",
+        w.bytes().to_vec(),
+        &mm,
+        "small: field \"e\": topic is subscribed but has no data messages in the log".into(),
+    );
+    // 18. Cyclic nested formats.
     let mut w = UlogWriter::new(0);
     w.format("s:uint64_t timestamp;s[1] v;");
     w.add(0, 7, "s");
@@ -444,7 +457,7 @@ fn malformed_catalogue() {
         &m,
         "nests deeper than 16 levels".into(),
     );
-    // 18. Flag bits later in the file.
+    // 19. Flag bits later in the file.
     let mut w = small_log();
     w.flag_bits([0; 8], [0; 8], [0; 3]);
     push(
@@ -453,7 +466,7 @@ fn malformed_catalogue() {
         &m,
         "'B' flag-bits message after the first message".into(),
     );
-    // 19. Instance that is not a number.
+    // 20. Instance that is not a number.
     let mut mm = m.clone();
     mm.signals.force.as_mut().unwrap().topic = Some("s[x]".into());
     push(
@@ -555,5 +568,34 @@ fn rotor_speeds_from_commanded_pwm() {
     assert!(
         e.contains("key \"signals.rotor_speeds\": actuator: give both `pwm_min` < `pwm_max`"),
         "{e}"
+    );
+}
+
+/// Read speed, by hand: `cargo test --release --test io_ulog -- --ignored --nocapture`.
+#[test]
+#[ignore = "timing, run by hand"]
+fn read_speed_of_a_large_file() {
+    let vehicle = quad(0.0);
+    let n = 200_000;
+    let chunks: Vec<SampleChunk> = (0..n / 1000)
+        .map(|c| {
+            let mut ch = analytic_chunk(1000, 400.0);
+            ch.t.iter_mut().for_each(|t| *t += c as f64 * 2.5);
+            ch
+        })
+        .collect();
+    let path = tmp("large.ulg");
+    write_samples(&path, &chunks).unwrap();
+    let bytes = std::fs::metadata(&path).unwrap().len() as f64;
+    let mapping = written_mapping(4, true, true, true);
+    let start = std::time::Instant::now();
+    let (got, _) = read_all(&path, &vehicle, &mapping).unwrap();
+    let s = start.elapsed().as_secs_f64();
+    assert_eq!(got.len(), n);
+    println!(
+        "{n} samples ({:.1} MB, 3 data messages each) in {s:.3} s: {:.2} M samples/s, {:.0} MB/s",
+        bytes / 1e6,
+        n as f64 / s / 1e6,
+        bytes / 1e6 / s
     );
 }

@@ -718,10 +718,11 @@ impl LogReader {
                 let h = row.t - last.t;
                 let decay = (-h / tau).exp();
                 let n = self.vehicle.rotors;
-                for i in 0..n {
-                    let (c, c_prev) = (row.command[i], last.command[i]);
+                let previous = last.omega[..n].iter().zip(&last.command[..n]);
+                let now = row.omega[..n].iter_mut().zip(&row.command[..n]);
+                for ((w, &c), (&w_prev, &c_prev)) in now.zip(previous) {
                     let lag = (c - c_prev) / h * tau;
-                    row.omega[i] = c - lag + (last.omega[i] - c_prev + lag) * decay;
+                    *w = c - lag + (w_prev - c_prev + lag) * decay;
                 }
             }
             self.window.push_back(row);

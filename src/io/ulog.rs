@@ -277,7 +277,7 @@ impl Formats {
                 .ok_or_else(|| format!("field path {path:?}: {ty:?} has no fields"))?;
             let mut found = None;
             for f in fields {
-                if &f.name == name {
+                if f.name == *name {
                     found = Some(f);
                     break;
                 }
@@ -356,7 +356,6 @@ struct MessageReader {
     buf: Vec<u8>,
     /// Type of the message returned last.
     kind: u8,
-    messages: u64,
 }
 
 impl MessageReader {
@@ -375,7 +374,6 @@ impl MessageReader {
             appended: Vec::new(),
             buf: Vec::with_capacity(1 << 16),
             kind: 0,
-            messages: 0,
         };
         if len < HEADER_BYTES {
             return Err(r.err(
@@ -445,7 +443,7 @@ impl MessageReader {
 
     /// Reads the next message; returns its byte offset (type in `kind`, payload in `buf`),
     /// `None` at the end of the file.
-    fn next(&mut self) -> Result<Option<u64>, IoError> {
+    fn next_message(&mut self) -> Result<Option<u64>, IoError> {
         loop {
             while self.appended.first().is_some_and(|&a| a <= self.pos) {
                 self.appended.remove(0);
@@ -490,7 +488,6 @@ impl MessageReader {
             let r = self.read_into(&mut buf);
             self.buf = buf;
             r?;
-            self.messages += 1;
             return Ok(Some(start));
         }
     }
@@ -585,7 +582,7 @@ pub fn read_definitions(path: &Path) -> Result<LogDefinitions, IoError> {
         ..LogDefinitions::default()
     };
     let mut first = true;
-    while let Some(offset) = r.next()? {
+    while let Some(offset) = r.next_message()? {
         let kind = r.kind;
         if std::mem::take(&mut first) && kind == b'B' {
             r.flag_bits(offset)?;
@@ -638,6 +635,8 @@ struct Topic {
     located: Option<(usize, Scalar, Vec<(usize, Scalar)>, usize)>,
     queue: VecDeque<Queued>,
     seen: bool,
+    /// Data messages read.
+    messages: u64,
 }
 
 /// Streaming ULog source; see the module docs.
@@ -720,6 +719,7 @@ impl UlogSource {
                         located: None,
                         queue: VecDeque::new(),
                         seen: false,
+                        messages: 0,
                     });
                     topics.len() - 1
                 }
@@ -773,7 +773,7 @@ impl UlogSource {
 
     /// Reads messages until one of a mapped topic is queued; false at end of file.
     fn read_message(&mut self) -> Result<bool, IoError> {
-        while let Some(offset) = self.reader.next()? {
+        while let Some(offset) = self.reader.next_message()? {
             let kind = self.reader.kind;
             if std::mem::take(&mut self.first_message) && kind == b'B' {
                 self.reader.flag_bits(offset)?;
@@ -953,6 +953,7 @@ impl UlogSource {
             self.latest_time = self.latest_time.max(t);
         }
         let epoch = self.epoch;
+        self.topics[j].messages += 1;
         self.topics[j].queue.push_back(Queued {
             t,
             values,
@@ -987,16 +988,21 @@ impl RowSource for UlogSource {
             if !ready {
                 if !self.read_message()? {
                     self.eof = true;
-                    if let Some(t) = self.topics.iter().find(|t| !t.seen) {
+                    if let Some(t) = self.topics.iter().find(|t| t.messages == 0) {
                         let logged: Vec<&str> = self.logged.iter().map(String::as_str).collect();
+                        let text = if t.seen {
+                            "topic is subscribed but has no data messages in the log".to_string()
+                        } else {
+                            format!(
+                                "topic not in the log (logged topics: {})",
+                                logged.join(", ")
+                            )
+                        };
                         return Err(IoError::new(
                             &self.file,
                             Location::File,
                             field(&t.key),
-                            ErrorKind::MissingSignal(format!(
-                                "topic not in the log (logged topics: {})",
-                                logged.join(", ")
-                            )),
+                            ErrorKind::MissingSignal(text),
                         ));
                     }
                 }

@@ -136,15 +136,20 @@ pub fn micros(t: f64) -> u64 {
     (t * 1e6).round().max(0.0) as u64
 }
 
-/// Writes `chunks` (rotor count of the first chunk) as a ULog file; see the module docs.
-/// Times are rounded to whole µs; a chunk without height or attitude is written with
-/// height 0 and the identity attitude.
+/// Writes `chunks` (rotor count of the first chunk; all chunks must have it) as a ULog
+/// file; see the module docs. Times are rounded to whole µs; a chunk without height or
+/// attitude is written with height 0 and the identity attitude.
 pub fn write_samples<'a>(
     path: &Path,
     chunks: impl IntoIterator<Item = &'a SampleChunk>,
 ) -> std::io::Result<()> {
     let mut chunks = chunks.into_iter().peekable();
     let rotors = chunks.peek().map_or(0, |c| c.omega.len());
+    if rotors > u8::MAX as usize {
+        return Err(std::io::Error::other(format!(
+            "{rotors} rotors: at most 255"
+        )));
+    }
     let mut w = UlogWriter::new(0);
     w.flag_bits([0; 8], [0; 8], [0; 3]);
     w.info("sys_name", "mrsysid");
@@ -164,29 +169,20 @@ pub fn write_samples<'a>(
             let ts = micros(c.t[k]);
             let mut state = ts.to_le_bytes().to_vec();
             let mut put = |v: f64| state.extend_from_slice(&v.to_le_bytes());
-            for a in 0..3 {
-                put(c.velocity[a][k]);
-            }
-            for a in 0..3 {
-                put(c.rates[a][k]);
-            }
-            for a in 0..6 {
-                put(c.wrench[a][k]);
+            for v in c.velocity.iter().chain(&c.rates).chain(&c.wrench) {
+                put(v[k]);
             }
             put(c.height.get(k).copied().unwrap_or(0.0));
-            for a in 0..4 {
-                put(c.attitude[a]
-                    .get(k)
-                    .copied()
-                    .unwrap_or(if a == 0 { 1.0 } else { 0.0 }));
+            for (q, identity) in c.attitude.iter().zip([1.0, 0.0, 0.0, 0.0]) {
+                put(q.get(k).copied().unwrap_or(identity));
             }
             w.data(0, &state);
             for (msg_id, scale) in [(1u16, 0.5), (2, 1.0)] {
                 let mut r = ts.to_le_bytes().to_vec();
                 r.push(rotors as u8);
                 r.extend_from_slice(&[0; 7]);
-                for i in 0..rotors {
-                    r.extend_from_slice(&(scale * c.omega[i][k]).to_le_bytes());
+                for (i, omega) in c.omega.iter().enumerate() {
+                    r.extend_from_slice(&(scale * omega[k]).to_le_bytes());
                     let od = c
                         .omega_dot
                         .get(i)
