@@ -251,15 +251,18 @@ impl Formats {
             .ok_or_else(|| format!("unknown type {ty:?} (neither a scalar nor a format)"))?;
         let mut size = 0usize;
         for f in fields {
-            let one = self.size_of(&f.ty, depth + 1)?;
             size = size
-                .checked_add(
-                    one.checked_mul(f.array.unwrap_or(1))
-                        .ok_or("format too large")?,
-                )
+                .checked_add(self.field_size(f, depth + 1)?)
                 .ok_or("format too large")?;
         }
         Ok(size)
+    }
+
+    /// Size of field `f` (all its array elements), bytes.
+    fn field_size(&self, f: &FieldDef, depth: usize) -> Result<usize, String> {
+        self.size_of(&f.ty, depth)?
+            .checked_mul(f.array.unwrap_or(1))
+            .ok_or_else(|| format!("field {:?} is too large", f.name))
     }
 
     /// Byte offset and scalar type of `path` inside a message of format `format`.
@@ -281,7 +284,9 @@ impl Formats {
                     found = Some(f);
                     break;
                 }
-                offset += self.size_of(&f.ty, 0)? * f.array.unwrap_or(1);
+                offset = offset
+                    .checked_add(self.field_size(f, 0)?)
+                    .ok_or("format too large")?;
             }
             let f = found.ok_or_else(|| {
                 let names: Vec<&str> = fields
@@ -306,7 +311,10 @@ impl Formats {
                         "index {k} out of range: field {name:?} of {ty:?} has {n} elements"
                     ));
                 }
-                offset += k * self.size_of(&f.ty, 0)?;
+                // k < n and the n elements' size fits (checked): k * size cannot overflow.
+                let element = self.size_of(&f.ty, 0)?;
+                self.field_size(f, 0)?;
+                offset = offset.checked_add(k * element).ok_or("format too large")?;
                 i += 1;
             }
             match Scalar::from_name(&f.ty) {
@@ -891,10 +899,10 @@ impl UlogSource {
             };
             let (toff, tscalar) = locate(&t.time.0)?;
             let mut fields = Vec::with_capacity(t.fields.len());
-            let mut need = toff + tscalar.size();
+            let mut need = toff.saturating_add(tscalar.size());
             for (_, path) in &t.fields {
                 let (o, s) = locate(path)?;
-                need = need.max(o + s.size());
+                need = need.max(o.saturating_add(s.size()));
                 fields.push((o, s));
             }
             self.topics[j].located = Some((toff, tscalar, fields, need));
@@ -1133,5 +1141,10 @@ mod tests {
                 .unwrap_err()
                 .contains("nests deeper")
         );
+        let big = "big:uint64_t timestamp;double[4611686018427387904] b;double x";
+        let (n, fields) = parse_format(big).unwrap();
+        f.insert(n, fields);
+        assert!(f.locate("big", "x").unwrap_err().contains("too large"));
+        assert!(f.locate("big", "b[3]").unwrap_err().contains("too large"));
     }
 }
