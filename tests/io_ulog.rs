@@ -599,3 +599,30 @@ fn read_speed_of_a_large_file() {
         bytes / 1e6 / s
     );
 }
+
+#[test]
+fn appended_data_after_a_cut_message_header_is_read() {
+    let vehicle = quad(0.0);
+    let small = small_log();
+    let mut bytes = small.bytes().to_vec();
+    // Half a message header, then the appended data: two more samples.
+    bytes.extend_from_slice(&[0x40, 0x00]);
+    let offset = bytes.len() as u64;
+    let mut more = UlogWriter::new(0);
+    for k in SMALL_SAMPLES..SMALL_SAMPLES + 2 {
+        let mut d = (1_000_000 + 10_000 * k).to_le_bytes().to_vec();
+        for x in [
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 900.0, 900.0, 900.0, 900.0, 0.0, 0.0, -11.0,
+        ] {
+            d.extend_from_slice(&f64::to_le_bytes(x));
+        }
+        more.data(7, &d);
+    }
+    bytes.extend_from_slice(&more.bytes()[16..]);
+    bytes[19 + 8] = 1;
+    bytes[19 + 16..19 + 24].copy_from_slice(&offset.to_le_bytes());
+    let path = tmp("appended-header.ulg");
+    std::fs::write(&path, &bytes).unwrap();
+    let (got, _) = read_all(&path, &vehicle, &small_mapping()).unwrap();
+    assert_eq!(got.len(), SMALL_SAMPLES as usize + 2);
+}

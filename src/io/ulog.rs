@@ -469,6 +469,13 @@ impl MessageReader {
                     ),
                 ));
             }
+            if let Some(&a) = self.appended.first()
+                && a < start + MESSAGE_HEADER_BYTES
+            {
+                // The writer stopped inside this message's header.
+                self.skip(a - start)?;
+                continue;
+            }
             let mut h = [0u8; 3];
             self.read_into(&mut h)?;
             let size = u16::from_le_bytes([h[0], h[1]]) as u64;
