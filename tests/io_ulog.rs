@@ -91,16 +91,13 @@ fn px4_like_log_aligns_slow_topics_on_the_gyro() {
     for k in 0..got.len() {
         let t = got.t[k];
         let g = px4_gyro(t);
-        for a in 0..3 {
-            assert_eq!(got.rates[a][k], g[a] as f64, "rates[{a}] at t = {t}");
+        for (a, g) in g.into_iter().enumerate() {
+            assert_eq!(got.rates[a][k], g as f64, "rates[{a}] at t = {t}");
         }
         // Identity attitude: body velocity = NED velocity, interpolated linearly (f32 data).
         let v = px4_velocity(t);
-        for a in 0..3 {
-            assert!(
-                (got.velocity[a][k] - v[a]).abs() < 2e-6,
-                "v[{a}] at t = {t}"
-            );
+        for (a, v) in v.into_iter().enumerate() {
+            assert!((got.velocity[a][k] - v).abs() < 2e-6, "v[{a}] at t = {t}");
         }
         for i in 0..4 {
             let want = px4_rpm(i, (t * 1e6).round() as u64) * std::f64::consts::PI / 30.0;

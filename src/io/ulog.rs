@@ -636,6 +636,16 @@ struct Queued {
     epoch: u32,
 }
 
+/// Where a mapped topic's time and fields sit in its data messages.
+struct Located {
+    /// Byte offset and type of the time field.
+    time: (usize, Scalar),
+    /// Byte offset and type of each mapped field, in mapping order.
+    fields: Vec<(usize, Scalar)>,
+    /// Data bytes a message needs to hold all of them.
+    need: usize,
+}
+
 /// A mapped topic instance.
 struct Topic {
     /// Key as written in the mapping, `name` or `name[k]`.
@@ -646,8 +656,8 @@ struct Topic {
     fields: Vec<(usize, String)>,
     /// Time field path and its factor to seconds.
     time: (String, f64),
-    /// Located time and fields: (offset, scalar), once subscribed.
-    located: Option<(usize, Scalar, Vec<(usize, Scalar)>, usize)>,
+    /// Time and fields located in the topic's format, once subscribed.
+    located: Option<Located>,
     queue: VecDeque<Queued>,
     seen: bool,
     /// Data messages read.
@@ -822,11 +832,7 @@ impl UlogSource {
                     }
                     self.subscriptions.remove(&u16::from_le_bytes([b[0], b[1]]));
                 }
-                b'D' => {
-                    if self.data(offset)? {
-                        return Ok(true);
-                    }
-                }
+                b'D' if self.data(offset)? => return Ok(true),
                 b'O' => {
                     let b = &self.reader.buf;
                     if b.len() < 2 {
@@ -912,7 +918,11 @@ impl UlogSource {
                 need = need.max(o.saturating_add(s.size()));
                 fields.push((o, s));
             }
-            self.topics[j].located = Some((toff, tscalar, fields, need));
+            self.topics[j].located = Some(Located {
+                time: (toff, tscalar),
+                fields,
+                need,
+            });
             self.topics[j].seen = true;
         }
         self.subscriptions.insert(msg_id, topic);
@@ -948,7 +958,12 @@ impl UlogSource {
         };
         let data = &b[2..];
         let topic = &self.topics[j];
-        let Some((toff, tscalar, fields, need)) = &topic.located else {
+        let Some(Located {
+            time: (toff, tscalar),
+            fields,
+            need,
+        }) = &topic.located
+        else {
             return Ok(false);
         };
         if data.len() < *need {

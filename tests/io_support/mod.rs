@@ -156,7 +156,7 @@ pub fn px4_like_log(opts: Px4Log) -> Vec<u8> {
         }
         let ts = t.to_le_bytes();
         let ft = t as f64 * 1e-6;
-        if t % 4000 == 0 {
+        if t.is_multiple_of(4000) {
             let mut d = ts.to_vec();
             for g in px4_gyro(ft) {
                 d.extend_from_slice(&g.to_le_bytes());
@@ -208,7 +208,7 @@ pub fn px4_like_log(opts: Px4Log) -> Vec<u8> {
                 w.data(msg_id, &d);
             }
         }
-        if t % 500_000 == 0 {
+        if t.is_multiple_of(500_000) {
             let mut d = ts.to_vec();
             d.extend_from_slice(&0.3f32.to_le_bytes());
             w.data(6, &d);
