@@ -222,6 +222,19 @@ fn print_reader_notes(out: &FitOutcome) {
         if s.segments > 1 {
             notes.push(format!("{} segments (gaps split the log)", s.segments));
         }
+        if !s.dropouts.is_empty() {
+            let ms: f64 = s.dropouts.iter().map(|d| d.duration).sum::<f64>() * 1e3;
+            notes.push(format!(
+                "{} logger dropouts ({ms:.0} ms in all), never bridged",
+                s.dropouts.len()
+            ));
+        }
+        notes.extend(
+            s.derived
+                .iter()
+                .filter(|d| d.contains("COMMANDED"))
+                .cloned(),
+        );
         notes.extend(s.unit_warnings.iter().cloned());
         if !notes.is_empty() {
             eprintln!("note: {}: {}", s.file, notes.join("; "));
@@ -420,5 +433,36 @@ pub fn validate(
         write_atomically(path, text.as_bytes())
             .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
     }
+    Ok(())
+}
+
+/// `mrsysid vehicle --from-ulog`: the vehicle skeleton from PX4's control-allocation
+/// parameters, to `out` or stdout; the notes (what to fill in, the layout check) go to
+/// stderr.
+pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> {
+    let defs = io::ulog::read_definitions(log).map_err(|e| Failure::input(e.to_string()))?;
+    let file = io::error::display_name(log);
+    let rotors = io::px4::rotors_from_parameters(&defs.parameters)
+        .map_err(|m| Failure::input(format!("{file}: {m}")))?;
+    let name = match (defs.info.get("sys_name"), defs.info.get("ver_hw")) {
+        (Some(s), Some(h)) => format!("{s} {h}"),
+        (Some(s), None) => s.clone(),
+        _ => file.clone(),
+    };
+    let text = io::px4::vehicle_skeleton(&rotors, &name, &file);
+    match out {
+        Some(path) => {
+            write_atomically(path, text.as_bytes())
+                .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
+            eprintln!("wrote {}", path.display());
+        }
+        None => print!("{text}"),
+    }
+    eprintln!(
+        "note: {} rotors from CA_ROTOR_* of {file}; fill in mass, inertia, rotor_radius and \
+         rotor_inertia (PX4 does not log them) before `mrsysid fit`.\nnote: layout: {}",
+        rotors.len(),
+        io::px4::layout_check(&rotors)
+    );
     Ok(())
 }

@@ -34,6 +34,19 @@ enum Command {
     Validate(ValidateArgs),
     /// Generate truth data: a response-surface sweep or a flight log (CSV data contract).
     Simulate(SimulateArgs),
+    /// Write a vehicle TOML skeleton from a PX4 ULog's control-allocation parameters
+    /// (rotor positions and spins); mass, inertia and rotor size are left to fill in.
+    Vehicle(VehicleArgs),
+}
+
+#[derive(clap::Args)]
+struct VehicleArgs {
+    /// PX4 ULog file whose CA_ROTOR_* parameters give the rotor layout.
+    #[arg(long)]
+    from_ulog: PathBuf,
+    /// Output TOML file (written atomically; stdout when absent).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 const FIT_EXAMPLES: &str = "Examples:
@@ -264,6 +277,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate_to_file(&args.options(), &args.out)
             .map(|rows| eprintln!("wrote {rows} rows to {}", args.out.display()))
             .map_err(|e| commands::Failure::input(e.to_string())),
+        Command::Vehicle(args) => commands::vehicle_from_ulog(&args.from_ulog, args.out.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

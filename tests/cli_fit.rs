@@ -223,6 +223,17 @@ fn diagnosis_finds_the_undeclared_drag_in_the_shipped_flight() {
         after < 0.7 * before,
         "Fx validation NRMSE {before} -> {after}"
     );
+    // One verdict per column: the simulator's yaw-rate rotor drag (a named two-parameter
+    // completion) is added, not the generic `Mz r*dt` that holds its leading column (the
+    // smallest-P test of its correlated parameters once rejected it, P = 3.7e-3).
+    let added: Vec<&str> = d["effects_added"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["name"].as_str().unwrap())
+        .collect();
+    assert!(added.contains(&"yaw-rate rotor drag"), "{added:?}");
+    assert!(!added.contains(&"generic Mz r*dt"), "{added:?}");
     // The saved model is the augmented one.
     let text = std::fs::read_to_string(&model).unwrap();
     assert!(text.contains("drag_area_x"));

@@ -1,6 +1,6 @@
 //! Mutation fuzzing of every parser of the io module: CSV reader (both policies),
 //! mapping TOML, vehicle TOML, MCAP reader (JSON and CDR), CDR decoder, ros2msg schema
-//! parser. Valid inputs are mutated (byte flips, deletions, insertions of hostile tokens,
+//! parser, ULog reader and definitions reader. Valid inputs are mutated (byte flips, deletions, insertions of hostile tokens,
 //! duplication, truncation); every case must return Ok or an error — never panic.
 //!
 //! CI runs a few thousand cases (well under 20 s); set `MRSYSID_FUZZ_CASES` to run
@@ -12,11 +12,13 @@ mod io_support;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
-use io_support::{analytic_chunk, quad};
+use io_support::{Px4Log, analytic_chunk, px4_like_log, quad};
 use mrsysid::io::cdr::decode;
 use mrsysid::io::contract_csv::write_contract_csv;
 use mrsysid::io::mcap_write::{Encoding, write_samples, written_mapping};
 use mrsysid::io::ros2msg::parse_schema;
+use mrsysid::io::ulog::read_definitions;
+use mrsysid::io::ulog_write;
 use mrsysid::io::{InvalidSamples, Mapping, ReadOptions, open_log};
 use mrsysid::vehicle::{Vehicle, VehicleSource};
 use rand::rngs::StdRng;
@@ -218,5 +220,37 @@ fn fuzz_cdr_decoder_and_schema_parser() {
                 let _ = decode(&s, &base);
             }
         });
+    }
+}
+
+#[test]
+fn fuzz_ulog_reader() {
+    let vehicle = quad(0.0);
+    let src = analytic_chunk(30, 100.0);
+    let written = tmp("base.ulg");
+    ulog_write::write_samples(&written, [&src]).unwrap();
+    let px4 = px4_like_log(Px4Log {
+        duration_us: 300_000,
+        dropout_at: Some(1_150_000),
+    });
+    let px4_mapping = Mapping::from_toml_file(Path::new("examples/px4.toml")).unwrap();
+    let bases = [
+        (
+            std::fs::read(&written).unwrap(),
+            ulog_write::written_mapping(4, true, true, true),
+        ),
+        (px4, px4_mapping),
+    ];
+    let mut rng = rng(5);
+    let path = tmp("case.ulg");
+    for (base, mapping) in &bases {
+        for case in 0..cases(800) {
+            let input = mutate(&mut rng, base);
+            std::fs::write(&path, &input).unwrap();
+            no_panic("ulog", case, &input, || {
+                drain(&path, &vehicle, Some(mapping), &ReadOptions::default());
+                let _ = read_definitions(&path);
+            });
+        }
     }
 }

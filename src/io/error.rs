@@ -15,6 +15,8 @@ pub enum Location {
     /// A 0-based message index of an MCAP file, in the order read (log-time order
     /// through the chunk indexes when the file has them, else file order).
     Record(u64),
+    /// A 0-based byte offset of a binary file (ULog: the start of a message).
+    Offset(u64),
 }
 
 /// An ingestion error: file, location, optional field, and what is wrong.
@@ -138,6 +140,7 @@ impl fmt::Display for IoError {
             Location::File => {}
             Location::Line(n) => write!(f, ": line {n}")?,
             Location::Record(n) => write!(f, ": message {n}")?,
+            Location::Offset(n) => write!(f, ": byte {n}")?,
         }
         if let Some(field) = &self.field {
             let sep = if self.location == Location::File {

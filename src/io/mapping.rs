@@ -133,16 +133,106 @@ pub struct SignalMap {
     /// CSV column names, one per component, in component order.
     #[serde(default)]
     pub columns: Vec<String>,
-    /// MCAP topic holding the signal.
+    /// MCAP or ULog topic holding the signal; a ULog multi-instance topic is named with
+    /// its instance, `actuator_outputs[1]` (instance 0 when absent).
     pub topic: Option<String>,
-    /// MCAP field paths inside the message (`angular_velocity.x`, `esc[0].rpm`), one per
-    /// component.
+    /// MCAP or ULog field paths inside the message (`angular_velocity.x`,
+    /// `esc[2].esc_rpm`), one per component.
     #[serde(default)]
     pub fields: Vec<String>,
     /// Unit of the logged values (see [`super::units::parse_unit`]); SI when absent.
     pub unit: Option<String>,
     /// Motor pole pairs, for unit `erpm`.
     pub pole_pairs: Option<f64>,
+    /// Rotor speeds only: the mapped fields are commanded actuator outputs (PWM or
+    /// normalised), turned into rotor speeds by this map. The model is then identified on
+    /// commanded, not measured, rotor speeds.
+    pub actuator: Option<ActuatorMap>,
+}
+
+/// How commanded actuator outputs become rotor speeds when a log has no rotor-speed
+/// telemetry: command u = (x − pwm_min)/(pwm_max − pwm_min) clamped to [0, 1] (x itself
+/// when no PWM range is given), thrust fraction (1 − f) u + f u² with PX4's thrust-curve
+/// factor f = `THR_MDL_FAC`, rotor speed Ω = `max_speed` · √(thrust fraction), optionally
+/// lagged by a first-order motor model with time constant τ.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActuatorMap {
+    /// Output at zero command (PWM, µs, e.g. 1000); absent for outputs normalised to 0..1.
+    pub pwm_min: Option<f64>,
+    /// Output at full command (PWM, µs, e.g. 2000).
+    pub pwm_max: Option<f64>,
+    /// Rotor speed at full command, in the signal's `unit` (rad/s when absent).
+    pub max_speed: f64,
+    /// PX4's `THR_MDL_FAC` f in [0, 1] (0: thrust linear in the command, rotor speed ∝ √u;
+    /// 1: thrust quadratic, rotor speed ∝ u). Default 0.
+    #[serde(default)]
+    pub thr_mdl_fac: f64,
+    /// First-order motor time constant τ, s: the rotor speed follows the command with
+    /// Ω̇ = (Ω_cmd − Ω)/τ, restarted at the command at each segment start.
+    pub time_constant: Option<f64>,
+}
+
+impl ActuatorMap {
+    /// Checks the ranges; the message names the offending key.
+    pub fn check(&self) -> Result<(), String> {
+        match (self.pwm_min, self.pwm_max) {
+            (Some(lo), Some(hi)) if lo.is_finite() && hi.is_finite() && lo < hi => {}
+            (None, None) => {}
+            (lo, hi) => {
+                return Err(format!(
+                    "actuator: give both `pwm_min` < `pwm_max` (finite), or neither (got {lo:?}, {hi:?})"
+                ));
+            }
+        }
+        if !(self.max_speed.is_finite() && self.max_speed > 0.0) {
+            return Err(format!(
+                "actuator: `max_speed` = {} must be positive",
+                self.max_speed
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.thr_mdl_fac) {
+            return Err(format!(
+                "actuator: `thr_mdl_fac` = {} must be in [0, 1]",
+                self.thr_mdl_fac
+            ));
+        }
+        if let Some(tau) = self.time_constant
+            && !(tau.is_finite() && tau > 0.0)
+        {
+            return Err(format!(
+                "actuator: `time_constant` = {tau} s must be positive"
+            ));
+        }
+        Ok(())
+    }
+
+    /// Commanded rotor speed of actuator output `x`, in the signal's unit.
+    pub fn speed(&self, x: f64) -> f64 {
+        let u = match (self.pwm_min, self.pwm_max) {
+            (Some(lo), Some(hi)) => (x - lo) / (hi - lo),
+            _ => x,
+        }
+        .clamp(0.0, 1.0);
+        let f = self.thr_mdl_fac;
+        self.max_speed * ((1.0 - f) * u + f * u * u).sqrt()
+    }
+
+    /// In words, for the reader's summary.
+    pub fn describe(&self) -> String {
+        let range = match (self.pwm_min, self.pwm_max) {
+            (Some(lo), Some(hi)) => format!("PWM {lo}..{hi}"),
+            _ => "normalised 0..1".into(),
+        };
+        let lag = self
+            .time_constant
+            .map_or(String::new(), |t| format!(", first-order lag {t} s"));
+        format!(
+            "rotor speeds from COMMANDED actuator outputs ({range}, max speed {}, THR_MDL_FAC {}{lag}): \
+             the model is identified on commanded, not measured, rotor speeds",
+            self.max_speed, self.thr_mdl_fac
+        )
+    }
 }
 
 /// The signals a log may carry; each optional, the reader says which are missing.
@@ -173,7 +263,7 @@ pub struct Signals {
     pub attitude: Option<SignalMap>,
 }
 
-/// MCAP-specific options.
+/// Options of topic-based logs (the `[mcap]` table serves MCAP and ULog alike).
 #[derive(Debug, Clone, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct McapOptions {
@@ -182,6 +272,10 @@ pub struct McapOptions {
     /// Per-topic time field overriding `[time]` (e.g. px4 `timestamp` in µs), by topic.
     #[serde(default)]
     pub topic_time: std::collections::BTreeMap<String, TopicTime>,
+    /// Largest spacing of the two messages of an asynchronous topic that a time-base
+    /// sample is interpolated between, s (default: the reader's `max_gap`). Raise it for
+    /// slow topics (a 10 Hz position estimate); logger dropouts are never bridged.
+    pub align_gap: Option<f64>,
 }
 
 /// The time field of one topic's messages.
@@ -208,7 +302,7 @@ pub struct Mapping {
     pub signals: Signals,
     /// Derivation options, overriding those of the read options.
     pub derive: Option<DeriveOptions>,
-    /// MCAP options.
+    /// Options of topic-based logs (MCAP and ULog).
     #[serde(default)]
     pub mcap: McapOptions,
 }
@@ -412,6 +506,12 @@ fn key_path(signal: Signal) -> String {
 }
 
 fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), String> {
+    if let Some(a) = &map.actuator {
+        if signal != Signal::RotorSpeeds {
+            return Err("`actuator` is only for rotor_speeds".into());
+        }
+        a.check()?;
+    }
     if let Some(unit) = &map.unit {
         unit_for(unit, map.pole_pairs, signal.dimension(), signal.key())?;
     }

@@ -1,5 +1,6 @@
-//! Log ingestion: contract and mapped CSV, MCAP (JSON and ROS 2 CDR), turned into the
-//! [`SampleChunk`] stream of the data contract (`docs/data-contract.md`), streaming in
+//! Log ingestion: contract and mapped CSV, MCAP (JSON and ROS 2 CDR) and PX4 ULog, turned
+//! into the [`SampleChunk`] stream of the data contract (`docs/data-contract.md`),
+//! streaming in
 //! bounded memory.
 //!
 //! Pipeline per sample: a source (CSV row or time-aligned MCAP messages) fills the slot
@@ -18,8 +19,11 @@ pub mod layout;
 pub mod mapping;
 pub mod mcap_read;
 pub mod mcap_write;
+pub mod px4;
 pub mod ros2msg;
 pub mod slots;
+pub mod ulog;
+pub mod ulog_write;
 pub mod units;
 pub mod validate;
 
@@ -93,12 +97,24 @@ pub struct Gap {
     pub to: f64,
 }
 
+/// A logger dropout recorded in a log (ULog `O` message): data were lost; the reader
+/// never interpolates across it and starts a new segment after it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dropout {
+    /// Byte offset of the dropout message in the file.
+    pub offset: u64,
+    /// Latest mapped-topic time read before the dropout, s (−∞ before any).
+    pub after: f64,
+    /// Duration the logger reports, s.
+    pub duration: f64,
+}
+
 /// What happened while reading a log; complete once the reader is exhausted.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Summary {
     /// File name.
     pub file: String,
-    /// Rows (CSV) or aligned samples (MCAP) read from the file.
+    /// Rows (CSV) or aligned samples (MCAP, ULog) read from the file.
     pub rows_read: u64,
     /// Samples emitted in chunks.
     pub samples: u64,
@@ -111,8 +127,10 @@ pub struct Summary {
     pub first_dropped: Vec<String>,
     /// Samples flagged as spikes per signal (kept, not dropped).
     pub spikes: BTreeMap<String, u64>,
-    /// Gaps that split the log (the first 100).
+    /// Gaps that split the log (the first 100), dropouts included.
     pub gaps: Vec<Gap>,
+    /// Logger dropouts the log records (ULog; the first 1000).
+    pub dropouts: Vec<Dropout>,
     /// Which signals were derived and how.
     pub derived: Vec<String>,
     /// Warnings about implausible units.
@@ -130,6 +148,15 @@ pub trait RowSource {
     /// the aligned base time), its time in seconds; `None` at end of file. After a
     /// sample-level error the source is ready for the next sample.
     fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError>;
+    /// True (once) when the sample returned last follows a logger dropout and must start
+    /// a new segment whatever the time step.
+    fn take_segment_break(&mut self) -> bool {
+        false
+    }
+    /// Logger dropouts read so far.
+    fn dropouts(&self) -> &[Dropout] {
+        &[]
+    }
 }
 
 /// One converted sample (SI, FRD/NED) inside the look-ahead window.
@@ -142,6 +169,8 @@ struct Row {
     ang_acc: [f64; 3],
     omega: [f64; MAX_ROTORS],
     omega_dot: [f64; MAX_ROTORS],
+    /// Commanded rotor speeds (actuator map), before the motor lag.
+    command: [f64; MAX_ROTORS],
     force: [f64; 3],
     moment: [f64; 3],
     specific_force: [f64; 3],
@@ -159,6 +188,7 @@ impl Default for Row {
             ang_acc: [0.0; 3],
             omega: [0.0; MAX_ROTORS],
             omega_dot: [0.0; MAX_ROTORS],
+            command: [0.0; MAX_ROTORS],
             force: [0.0; 3],
             moment: [0.0; 3],
             specific_force: [0.0; 3],
@@ -217,11 +247,12 @@ pub struct LogReader {
     times: Vec<f64>,
     weights: Vec<f64>,
     is_mcap: bool,
+    actuator: Option<mapping::ActuatorMap>,
 }
 
-/// Opens a CSV (contract or mapped) or MCAP log for streaming; the format is chosen by
-/// the MCAP magic bytes. `mapping` is required for MCAP and for CSV files that do not
-/// follow the contract.
+/// Opens a CSV (contract or mapped), MCAP or ULog log for streaming; the format is
+/// chosen by the MCAP or ULog magic bytes. `mapping` is required for MCAP and ULog and
+/// for CSV files that do not follow the contract.
 pub fn open_log(
     path: &Path,
     vehicle: &Vehicle,
@@ -260,29 +291,42 @@ pub fn open_log(
             ErrorKind::Mapping(format!("max_gap = {} s must be positive", opts.max_gap)),
         ));
     }
-    if is_mcap(path)
-        .map_err(|e| IoError::new(&file, Location::File, None, ErrorKind::Read(e.to_string())))?
-    {
+    let magic = sniff(path)
+        .map_err(|e| IoError::new(&file, Location::File, None, ErrorKind::Read(e.to_string())))?;
+    if magic != Magic::Csv {
+        let what = if magic == Magic::Mcap {
+            "an MCAP"
+        } else {
+            "a ULog"
+        };
         let mapping = mapping.ok_or_else(|| {
             IoError::new(
                 &file,
                 Location::File,
                 None,
-                ErrorKind::Mapping(
-                    "an MCAP log needs a mapping file naming topics and fields".into(),
-                ),
+                ErrorKind::Mapping(format!(
+                    "{what} log needs a mapping file naming topics and fields"
+                )),
             )
         })?;
-        let (source, layout) =
-            mcap_read::McapSource::open(path, &file, mapping, rotors, opts.max_gap)?;
+        let align_gap = mapping.mcap.align_gap.unwrap_or(opts.max_gap);
+        if align_gap.is_nan() || align_gap <= 0.0 {
+            return Err(IoError::new(
+                &file,
+                Location::File,
+                error::key("mcap.align_gap"),
+                ErrorKind::Mapping(format!("align_gap = {align_gap} s must be positive")),
+            ));
+        }
+        let (source, layout): (Box<dyn RowSource>, _) = if magic == Magic::Mcap {
+            let (s, l) = mcap_read::McapSource::open(path, &file, mapping, rotors, align_gap)?;
+            (Box::new(s), l)
+        } else {
+            let (s, l) = ulog::UlogSource::open(path, &file, mapping, rotors, align_gap)?;
+            (Box::new(s), l)
+        };
         return Ok(LogReader::new(
-            Box::new(source),
-            layout,
-            mapping,
-            vehicle,
-            opts,
-            &file,
-            true,
+            source, layout, mapping, vehicle, opts, &file, true,
         ));
     }
     let (source, resolved, layout) =
@@ -298,8 +342,23 @@ pub fn open_log(
     ))
 }
 
-/// True when the file starts with the MCAP magic bytes.
-fn is_mcap(path: &Path) -> std::io::Result<bool> {
+/// A log's format, from its first bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Magic {
+    Csv,
+    Mcap,
+    Ulog,
+}
+
+/// The format of the file by its magic bytes (MCAP, ULog), else CSV; a `.ulg` file is
+/// ULog whatever its first bytes (so a corrupt one is told so).
+fn sniff(path: &Path) -> std::io::Result<Magic> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ulg"))
+    {
+        return Ok(Magic::Ulog);
+    }
     let mut magic = [0u8; 8];
     let mut f = std::fs::File::open(path)?;
     let mut n = 0;
@@ -310,7 +369,13 @@ fn is_mcap(path: &Path) -> std::io::Result<bool> {
         }
         n += k;
     }
-    Ok(n >= 5 && &magic[..5] == b"\x89MCAP")
+    Ok(if n >= 5 && &magic[..5] == b"\x89MCAP" {
+        Magic::Mcap
+    } else if n >= 7 && magic[..7] == ulog::MAGIC {
+        Magic::Ulog
+    } else {
+        Magic::Csv
+    })
 }
 
 impl LogReader {
@@ -374,6 +439,13 @@ impl LogReader {
                 None => "force F = m a from the accelerometer".into(),
             });
         }
+        let actuator = mapping
+            .get(Signal::RotorSpeeds)
+            .and_then(|m| m.actuator)
+            .filter(|_| layout.has(Signal::RotorSpeeds));
+        if let Some(a) = &actuator {
+            summary.derived.push(a.describe());
+        }
         if !layout.has(Signal::VelocityBody) {
             summary
                 .derived
@@ -410,6 +482,7 @@ impl LogReader {
             times: Vec::new(),
             weights: Vec::new(),
             is_mcap,
+            actuator,
         }
     }
 
@@ -442,6 +515,13 @@ impl LogReader {
             return Ok(None);
         };
         self.summary.rows_read += 1;
+        if let (Some(a), Some(start)) = (&self.actuator, self.layout.start(Signal::RotorSpeeds)) {
+            for v in &mut self.raw[start..start + self.vehicle.rotors] {
+                if v.is_finite() {
+                    *v = a.speed(*v);
+                }
+            }
+        }
         let file = self.summary.file.as_str();
         for slot in 0..self.raw.len() {
             let v = self.raw[slot] * self.layout.factor(slot);
@@ -521,6 +601,7 @@ impl LogReader {
         let n = self.vehicle.rotors;
         if let Some(i) = l.start(Signal::RotorSpeeds) {
             row.omega[..n].copy_from_slice(&raw[i..i + n]);
+            row.command = row.omega;
         }
         if let Some(i) = l.start(Signal::RotorAccelerations) {
             row.omega_dot[..n].copy_from_slice(&raw[i..i + n]);
@@ -592,7 +673,18 @@ impl LogReader {
                     continue;
                 }
             };
+            let forced = self.source.take_segment_break();
             if let Some(last) = self.window.back() {
+                if forced && row.t > last.t {
+                    if self.summary.gaps.len() < 100 {
+                        self.summary.gaps.push(Gap {
+                            from: last.t,
+                            to: row.t,
+                        });
+                    }
+                    self.pending = Some(row);
+                    return Ok(());
+                }
                 if row.t <= last.t {
                     let e = IoError::new(
                         &self.summary.file,
@@ -615,6 +707,23 @@ impl LogReader {
                     }
                     self.pending = Some(row);
                     return Ok(());
+                }
+            }
+            let mut row = row;
+            if let (Some(tau), Some(last)) = (
+                self.actuator.and_then(|a| a.time_constant),
+                self.window.back(),
+            ) {
+                // Ω̇ = (c − Ω)/τ solved exactly for a command c linear over the step (as the
+                // aligned command is): Ω = c − ċτ + (Ω_prev − c_prev + ċτ) e^(−Δt/τ).
+                let h = row.t - last.t;
+                let decay = (-h / tau).exp();
+                let n = self.vehicle.rotors;
+                let previous = last.omega[..n].iter().zip(&last.command[..n]);
+                let now = row.omega[..n].iter_mut().zip(&row.command[..n]);
+                for ((w, &c), (&w_prev, &c_prev)) in now.zip(previous) {
+                    let lag = (c - c_prev) / h * tau;
+                    *w = c - lag + (w_prev - c_prev + lag) * decay;
                 }
             }
             self.window.push_back(row);
@@ -816,6 +925,7 @@ impl LogReader {
     fn finish_summary(&mut self) {
         self.summary.layout = self.layout_acc.finish();
         self.summary.unit_warnings = self.unit_stats.warnings();
+        self.summary.dropouts = self.source.dropouts().to_vec();
     }
 
     fn step(&mut self) -> Result<Option<SampleChunk>, IoError> {
@@ -863,6 +973,7 @@ fn loc_text(loc: Location) -> String {
         Location::File => "file".into(),
         Location::Line(n) => format!("line {n}"),
         Location::Record(n) => format!("message {n}"),
+        Location::Offset(n) => format!("byte {n}"),
     }
 }
 

@@ -1,0 +1,199 @@
+//! PX4 helpers: a vehicle TOML skeleton from the autopilot's control-allocation
+//! parameters in a ULog file.
+//!
+//! PX4 gives rotor `i` (0-based, motor `i + 1`) its hub position `CA_ROTOR{i}_P{X,Y,Z}`
+//! (m, body FRD: x forward, y right, z down — the crate's axes) and moment coefficient
+//! `CA_ROTOR{i}_KM` (torque = KM · thrust, positive for counter-clockwise rotation seen
+//! from above). The crate's spin is +1 for clockwise seen from above, so
+//! spin = −sign(KM); the hub height above the CG is −mean(PZ).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use crate::vehicle::{MassAndRotorProperties, Rotor, Vehicle};
+
+/// One rotor from PX4's control-allocation parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Px4Rotor {
+    /// Hub x (forward), m.
+    pub x: f64,
+    /// Hub y (right), m.
+    pub y: f64,
+    /// Hub z (down), m.
+    pub z: f64,
+    /// Moment coefficient KM (torque / thrust), m; positive counter-clockwise.
+    pub km: f64,
+}
+
+/// The rotors `CA_ROTOR0..CA_ROTOR{n−1}` of `CA_ROTOR_COUNT`; errors name the missing or
+/// invalid parameter.
+pub fn rotors_from_parameters(params: &BTreeMap<String, f64>) -> Result<Vec<Px4Rotor>, String> {
+    let count = *params
+        .get("CA_ROTOR_COUNT")
+        .ok_or("parameter CA_ROTOR_COUNT is not in the log (PX4 before v1.13 has no control-allocation parameters)")?;
+    if !(1.0..=super::MAX_ROTORS as f64).contains(&count) || count.fract() != 0.0 {
+        return Err(format!(
+            "CA_ROTOR_COUNT = {count}: expected a whole number 1..={}",
+            super::MAX_ROTORS
+        ));
+    }
+    (0..count as usize)
+        .map(|i| {
+            let get = |suffix: &str| {
+                let name = format!("CA_ROTOR{i}_{suffix}");
+                params
+                    .get(&name)
+                    .copied()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| format!("parameter {name} is not in the log or not finite"))
+            };
+            let km = get("KM")?;
+            if km == 0.0 {
+                return Err(format!(
+                    "CA_ROTOR{i}_KM = 0: the spin direction of rotor {} is unknown",
+                    i + 1
+                ));
+            }
+            Ok(Px4Rotor {
+                x: get("PX")?,
+                y: get("PY")?,
+                z: get("PZ")?,
+                km,
+            })
+        })
+        .collect()
+}
+
+/// The vehicle TOML skeleton for `rotors` (from log `log_name`, vehicle `name`): the
+/// rotor table, spins and hub height filled in; mass, inertia, rotor radius and rotor
+/// inertia left as commented lines for the user. The last comment says whether the
+/// layout satisfies the seed's Assumption 2 (the vehicle loader refuses it otherwise).
+pub fn vehicle_skeleton(rotors: &[Px4Rotor], name: &str, log_name: &str) -> String {
+    let n = rotors.len().max(1) as f64;
+    // PX4 stores the parameters as f32: print them at f32 precision (+ 0.0 clears −0).
+    let hub_height = (-rotors.iter().map(|r| r.z).sum::<f64>() / n) as f32 + 0.0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Vehicle skeleton from PX4's control-allocation parameters in {log_name}\n\
+         # (`mrsysid vehicle --from-ulog`): CA_ROTOR_COUNT = {}, CA_ROTOR{{i}}_P{{X,Y,Z}}, CA_ROTOR{{i}}_KM.\n\
+         # Rotor k is PX4's CA rotor k-1 (motor k): map actuator_motors.control[k-1] or\n\
+         # esc_status.esc[k-1] in this order. Axes: body FRD (x forward, y right), as PX4's.\n\
+         # spin = +1 is clockwise seen from above, i.e. CA_ROTOR_KM < 0 (PX4: KM > 0 is CCW).\n\
+         # FILL IN mass, inertia, rotor_radius and rotor_inertia: PX4 does not log them, and\n\
+         # the vehicle loader refuses this file until they are given.",
+        rotors.len()
+    );
+    let _ = writeln!(s, "name = {name:?}");
+    s += "# mass = 1.5                 # kg  FILL IN\n";
+    s +=
+        "# inertia = [[0.02, 0, 0], [0, 0.02, 0], [0, 0, 0.04]]   # kg m^2 about the CG  FILL IN\n";
+    s += "air_density = 1.225          # kg/m^3 (sea-level standard atmosphere)\n";
+    s += "# rotor_radius = 0.12        # R, m  FILL IN\n";
+    let _ = writeln!(
+        s,
+        "hub_height = {hub_height}    # m, rotor plane above the CG (-mean CA_ROTOR*_PZ)"
+    );
+    s += "# rotor_inertia = 0.0        # J_z of one motor + rotor, kg m^2 (0: neglected)\n";
+    for (i, r) in rotors.iter().enumerate() {
+        let spin = if r.km < 0.0 { 1 } else { -1 };
+        let _ = writeln!(
+            s,
+            "\n[[rotors]]   # CA rotor {i}, KM = {}\nx = {}\ny = {}\nspin = {spin}",
+            r.km as f32, r.x as f32, r.y as f32
+        );
+    }
+    let check = layout_check(rotors);
+    let _ = writeln!(s, "\n# Layout check: {check}");
+    s
+}
+
+/// Whether the rotor layout satisfies the seed's Assumption 2, in words.
+pub fn layout_check(rotors: &[Px4Rotor]) -> String {
+    let props = MassAndRotorProperties {
+        mass: 1.0,
+        inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        air_density: 1.225,
+        rotor_radius: 0.1,
+        hub_height: 0.0,
+        rotor_inertia: 0.0,
+    };
+    let table = rotors
+        .iter()
+        .map(|r| Rotor {
+            x: r.x,
+            y: r.y,
+            spin: if r.km < 0.0 { 1.0 } else { -1.0 },
+        })
+        .collect();
+    match Vehicle::from_rotors("px4", props, table) {
+        Ok(v) => format!(
+            "satisfies Assumption 2 (arm length {:.4} m, {:?})",
+            v.arm_length(),
+            v.class()
+        ),
+        Err(e) => format!(
+            "the vehicle loader will refuse this layout: {} (general planar layouts are not supported yet)",
+            e.kind
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(arms: [(f64, f64, f64); 4]) -> BTreeMap<String, f64> {
+        let mut p = BTreeMap::from([("CA_ROTOR_COUNT".to_string(), 4.0)]);
+        for (i, (x, y, km)) in arms.into_iter().enumerate() {
+            p.insert(format!("CA_ROTOR{i}_PX"), x);
+            p.insert(format!("CA_ROTOR{i}_PY"), y);
+            p.insert(format!("CA_ROTOR{i}_PZ"), -0.03);
+            p.insert(format!("CA_ROTOR{i}_KM"), km);
+        }
+        p
+    }
+
+    #[test]
+    fn quad_x_skeleton_loads_once_filled_in() {
+        let a = 0.15;
+        let p = params([(a, a, 0.05), (-a, -a, 0.05), (a, -a, -0.05), (-a, a, -0.05)]);
+        let rotors = rotors_from_parameters(&p).unwrap();
+        let text = vehicle_skeleton(&rotors, "test", "t.ulg");
+        assert!(text.contains("satisfies Assumption 2"), "{text}");
+        let filled = text
+            .replace("# mass = 1.5", "mass = 1.5")
+            .replace("# inertia", "inertia")
+            .replace("# rotor_radius", "rotor_radius");
+        let v = Vehicle::from_toml_str(&filled, crate::vehicle::VehicleSource::Code).unwrap();
+        assert_eq!(v.rotor_count(), 4);
+        // KM > 0 (CCW) -> spin -1; hub 3 cm above the CG (PZ = -0.03, z down).
+        assert_eq!(v.rotors()[0].spin, -1.0);
+        assert_eq!(v.rotors()[2].spin, 1.0);
+        assert!((v.props.hub_height - 0.03).abs() < 1e-12);
+        assert!((v.arm_length() - a * 2f64.sqrt()).abs() < 1e-12);
+        assert!(Vehicle::from_toml_str(&text, crate::vehicle::VehicleSource::Code).is_err());
+    }
+
+    #[test]
+    fn missing_and_asymmetric() {
+        let mut p = params([(0.1, 0.1, 0.05); 4]);
+        p.remove("CA_ROTOR2_KM");
+        assert!(
+            rotors_from_parameters(&p)
+                .unwrap_err()
+                .contains("CA_ROTOR2_KM")
+        );
+        let p = params([
+            (0.29, 0.24, 0.05),
+            (-0.29, -0.24, 0.05),
+            (0.29, -0.24, -0.05),
+            (-0.29, 0.24, -0.05),
+        ]);
+        let text = layout_check(&rotors_from_parameters(&p).unwrap());
+        assert!(
+            text.contains("satisfies") || text.contains("refuse"),
+            "{text}"
+        );
+    }
+}
