@@ -35,7 +35,19 @@ struct ModelFile {
     /// Parameters beyond Eq. 22 (effects added by the diagnosis), with their columns.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     extra: Vec<ExtraParameter>,
+    /// Terms of Eq. 22 and of `extra` left out of the model (not supported by held-out
+    /// data); a parameter without any term left is not in the model.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    left_out: Vec<LeftOutTerm>,
     parameters: Vec<ParameterEstimate>,
+}
+
+/// A parameter's columns on one axis, left out of the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LeftOutTerm {
+    parameter: String,
+    axis: Axis,
 }
 
 /// A parameter added to the Eq. 22 structure, stored with its regressor columns.
@@ -124,6 +136,7 @@ impl IdentifiedModel {
                 x.columns,
             );
         }
+        let structure = without(&structure, &file.left_out);
         let names: Vec<&str> = structure.params.iter().map(|p| p.name.as_str()).collect();
         let stored: Vec<&str> = file.parameters.iter().map(|p| p.name.as_str()).collect();
         if names != stored {
@@ -152,10 +165,10 @@ impl IdentifiedModel {
             path: path.to_path_buf(),
             message,
         };
-        let base = ModelStructure::eq22(&self.vehicle, self.structure.options)
-            .params
-            .len();
-        let extra = (base..self.structure.params.len())
+        let mut full = ModelStructure::eq22(&self.vehicle, self.structure.options);
+        let is_eq22 = |name: &str| full.param_index(name).is_some();
+        let extra: Vec<ExtraParameter> = (0..self.structure.params.len())
+            .filter(|&p| !is_eq22(&self.structure.params[p].name))
             .map(|p| ExtraParameter {
                 name: self.structure.params[p].name.clone(),
                 unit: self.structure.params[p].unit.clone(),
@@ -168,11 +181,37 @@ impl IdentifiedModel {
                     .collect(),
             })
             .collect();
+        for x in &extra {
+            full.add_parameter(
+                Parameter {
+                    name: x.name.clone(),
+                    unit: x.unit.clone(),
+                },
+                x.columns.clone(),
+            );
+        }
+        let term = |s: &ModelStructure, c: &Column| (s.params[c.param].name.clone(), c.axis);
+        let mut kept: Vec<(String, Axis)> = self
+            .structure
+            .columns
+            .iter()
+            .map(|c| term(&self.structure, c))
+            .collect();
+        kept.sort();
+        let mut left_out: Vec<LeftOutTerm> = full
+            .columns
+            .iter()
+            .map(|c| term(&full, c))
+            .filter(|t| kept.binary_search(t).is_err())
+            .map(|(parameter, axis)| LeftOutTerm { parameter, axis })
+            .collect();
+        left_out.dedup();
         let file = ModelFile {
             schema_version: MODEL_FILE_VERSION,
             vehicle: self.vehicle.definition(),
             model: self.structure.options,
             extra,
+            left_out,
             parameters: self.parameters.clone(),
         };
         let text = toml::to_string(&file).map_err(|e| err(e.to_string()))?;
@@ -228,6 +267,20 @@ impl IdentifiedModel {
         }
         Ok(y)
     }
+}
+
+/// `structure` without the columns of the `left_out` terms, and without the parameters
+/// left with no column.
+fn without(structure: &ModelStructure, left_out: &[LeftOutTerm]) -> ModelStructure {
+    let keep: Vec<usize> = (0..structure.columns.len())
+        .filter(|&j| {
+            let c = &structure.columns[j];
+            !left_out
+                .iter()
+                .any(|t| t.axis == c.axis && t.parameter == structure.params[c.param].name)
+        })
+        .collect();
+    structure.select_columns(&keep)
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.

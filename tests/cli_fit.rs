@@ -451,9 +451,17 @@ fn real_neurobem_validation_logs_are_for_reporting_only() {
     // Fit two flights and report on a third: decisions are cross-validated on the two
     // fit logs (two folds), and the third is scored only at the end. Measured on the
     // race track: Fz R² 0.13 -> 0.85 and Mx 0.07 -> 0.33 (bounds 0.7 and 0.2).
+    let model = tmp("neurobem_rotation_model.toml");
     let v = fit_neurobem(
         "neurobem_rotation",
-        &[FIGURE8, MELON, "--validate", RACETRACK],
+        &[
+            FIGURE8,
+            MELON,
+            "--validate",
+            RACETRACK,
+            "--model-out",
+            model.to_str().unwrap(),
+        ],
     );
     assert_eq!(v["validation_samples"].as_u64().unwrap(), 12724);
     let d = &v["diagnosis"];
@@ -478,6 +486,34 @@ fn real_neurobem_validation_logs_are_for_reporting_only() {
     );
     assert!(val("after", 2) >= 0.7, "Fz {}", val("after", 2));
     assert!(val("after", 3) >= 0.2, "Mx {}", val("after", 3));
+    // The saved model is the final one, terms left out included: `validate` on the
+    // race track reproduces the diagnosis' "after" figures (1e-9: the same statistics
+    // accumulated in another order).
+    assert!(!d["unsupported"].as_array().unwrap().is_empty());
+    let metrics = tmp("neurobem_rotation_validate.json");
+    let out = mrsysid(&[
+        "validate",
+        "--model",
+        model.to_str().unwrap(),
+        &format!("data/neurobem/{RACETRACK}"),
+        "--mapping",
+        "examples/neurobem.toml",
+        "--json",
+        metrics.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m = json(&metrics);
+    for axis in 0..6 {
+        let saved = m["axes"][axis]["r2"].as_f64().unwrap();
+        assert!(
+            (saved - val("after", axis)).abs() < 1e-9,
+            "axis {axis}: {saved}"
+        );
+    }
 }
 
 #[test]
