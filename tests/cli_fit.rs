@@ -452,16 +452,10 @@ fn real_neurobem_validation_logs_are_for_reporting_only() {
     // fit logs (two folds), and the third is scored only at the end. Measured on the
     // race track: Fz R² 0.13 -> 0.85 and Mx 0.07 -> 0.33 (bounds 0.7 and 0.2).
     let model = tmp("neurobem_rotation_model.toml");
+    let model_out = format!("--model-out={}", model.display());
     let v = fit_neurobem(
         "neurobem_rotation",
-        &[
-            FIGURE8,
-            MELON,
-            "--validate",
-            RACETRACK,
-            "--model-out",
-            model.to_str().unwrap(),
-        ],
+        &[FIGURE8, MELON, "--validate", RACETRACK, &model_out],
     );
     assert_eq!(v["validation_samples"].as_u64().unwrap(), 12724);
     let d = &v["diagnosis"];
@@ -597,14 +591,15 @@ fn clean_flights_get_no_undeclared_effect() {
     // every one of these flights visits (48–102 samples descending at 0.5–1.5 ν0 with
     // V_h < ν0), and which Eq. 22's linearised inflow lacks; the vortex-ring candidate
     // is that nonlinearity (on 2 of the 10 seeds it pays on validation). Model
-    // completions and generic-pool terms may be added: the simulator's inflow and hub
-    // kinematics hold physics Eq. 22 lacks, and naming it as such is right.
+    // completions and unspecific terms (generic-pool monomials, moment coefficients
+    // freed from the forces) may be added: the simulator's inflow and hub kinematics
+    // hold physics Eq. 22 lacks, and naming it as such is right.
     for seed in 40..50 {
         let v = simulate_and_fit(&format!("clean_{seed}"), &["--seed", &seed.to_string()]);
         let added = v["diagnosis"]["effects_added"].as_array().unwrap();
         let effects: Vec<&str> = added
             .iter()
-            .filter(|e| e["model_completion"] == false && e["generic"] == false)
+            .filter(|e| e["model_completion"] == false && e["unspecific"] == false)
             .map(|e| e["name"].as_str().unwrap())
             .filter(|&n| n != "vortex-ring state")
             .collect();

@@ -124,6 +124,10 @@ pub struct EffectRow {
     /// True for a term of the generic pool: residual structure with no physical name.
     #[serde(default)]
     pub generic: bool,
+    /// True for a hypothesis that names no mechanism: a generic term, or a moment
+    /// coefficient freed from the forces.
+    #[serde(default)]
+    pub unspecific: bool,
     /// Axes it acts on.
     pub axes: Vec<Axis>,
     /// Its parameters.
@@ -166,6 +170,7 @@ impl From<&CandidateScore> for EffectRow {
             name: c.name.clone(),
             model_completion: c.kind.is_model_completion(),
             generic: c.kind == crate::diagnose::EffectKind::Generic,
+            unspecific: c.kind.is_unspecific(),
             axes: c.axes.clone(),
             parameters: c
                 .parameters
