@@ -591,9 +591,9 @@ fn score(
 ) -> (CandidateScore, usize, Option<Trial>) {
     let cand = &stats.candidates[c];
     let own_params = &stats.candidate_params[c];
-    let mut params = kept.to_vec();
-    params.extend(stats.columns_of(|p| own_params.contains(&p)));
-    params.sort_unstable();
+    let mut columns = kept.to_vec();
+    columns.extend(stats.columns_of(|p| own_params.contains(&p)));
+    columns.sort_unstable();
     let axes = cand.axes();
     let mut s = CandidateScore {
         name: cand.name.clone(),
@@ -605,7 +605,7 @@ fn score(
         p: 1.0,
         rejected: String::new(),
     };
-    let t = match trial(stats, &params, fit_options, options.variance_inflation) {
+    let t = match trial(stats, &columns, fit_options, options.variance_inflation) {
         Ok(t) => t,
         Err(e) => {
             s.rejected = format!("cannot be estimated: {e}");
