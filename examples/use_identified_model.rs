@@ -10,7 +10,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use mrsysid::identified::IdentifiedModel;
+use mrsysid::{IdentifiedModel, Sample};
 
 fn main() -> ExitCode {
     let Some(path) = std::env::args_os().nth(1).map(PathBuf::from) else {
@@ -32,11 +32,15 @@ fn main() -> ExitCode {
     );
     // Trim: the equal rotor speed whose thrust carries the weight (bisection on F_z).
     let weight = model.vehicle.props.mass * mrsysid::vehicle::STANDARD_GRAVITY;
-    let fz = |w: f64| {
-        model
-            .predict([0.0; 3], [0.0; 3], &vec![w; n], &vec![0.0; n])
-            .map(|(f, _)| f[2])
+    // A state: body velocity (m/s), rates (rad/s), equal rotor speeds (rad/s).
+    let state = |velocity: [f64; 3], rates: [f64; 3], w: f64| Sample {
+        velocity,
+        rates,
+        omega: vec![w; n],
+        omega_dot: vec![0.0; n],
+        ..Sample::default()
     };
+    let fz = |w: f64| model.predict(&state([0.0; 3], [0.0; 3], w)).map(|y| y[2]);
     let (mut lo, mut hi) = (1.0, 20_000.0);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
@@ -55,10 +59,15 @@ fn main() -> ExitCode {
         ("hover", [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]),
         ("10 m/s forward, rolling", [10.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
     ] {
-        match model.predict(velocity, rates, &vec![hover; n], &vec![0.0; n]) {
-            Ok((f, m)) => println!(
-                "{label:>24}: F = [{:8.3} {:8.3} {:8.3}] N, M = [{:8.4} {:8.4} {:8.4}] N m",
-                f[0], f[1], f[2], m[0], m[1], m[2]
+        let s = state(velocity, rates, hover);
+        let sigma = match model.prediction_std(&s) {
+            Ok(Some(sd)) => format!(" (σ F_z {:.3} N from the parameter covariance)", sd[2]),
+            _ => String::new(),
+        };
+        match model.predict(&s) {
+            Ok(y) => println!(
+                "{label:>24}: F = [{:8.3} {:8.3} {:8.3}] N, M = [{:8.4} {:8.4} {:8.4}] N m{sigma}",
+                y[0], y[1], y[2], y[3], y[4], y[5]
             ),
             Err(e) => {
                 eprintln!("error: {e}");

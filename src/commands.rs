@@ -5,14 +5,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-use mrsysid::diagnose::DiagnoseOptions;
-use mrsysid::estimate::{self, FitOptions, ResidualDiagnostics};
+use mrsysid::Identification;
+use mrsysid::estimate::{self, ResidualDiagnostics};
 use mrsysid::identified::{IdentifiedModel, write_atomically};
 use mrsysid::io::{self, InvalidSamples, Mapping, ReadOptions};
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries};
+use mrsysid::model::{ModelOptions, Workspace};
+use mrsysid::pipeline::{FitOutcome, Holdout, PlotSeries};
 use mrsysid::report::plots::{self, AxisSeries, NormalProbability, ResidualDensity};
-use mrsysid::report::summary::{AxisRow, Report};
+use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
 use mrsysid::sample::Axis;
 use mrsysid::stats::Accumulator;
@@ -35,8 +35,8 @@ impl Failure {
     }
 }
 
-impl From<pipeline::PipelineError> for Failure {
-    fn from(e: pipeline::PipelineError) -> Self {
+impl From<mrsysid::Error> for Failure {
+    fn from(e: mrsysid::Error) -> Self {
         Self {
             code: e.exit_code(),
             message: e.to_string(),
@@ -79,14 +79,7 @@ fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
 
 /// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
 pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
-    let vehicle =
-        Vehicle::from_toml_file(&cmd.vehicle).map_err(|e| Failure::input(e.to_string()))?;
-    if !(cmd.holdout_segment.is_finite() && cmd.holdout_segment > 0.0) {
-        return Err(Failure::input(format!(
-            "--holdout-segment {} must be a positive number of seconds",
-            cmd.holdout_segment
-        )));
-    }
+    let vehicle = Vehicle::from_toml_file(&cmd.vehicle).map_err(mrsysid::Error::from)?;
     if let Some(dir) = &cmd.plots {
         std::fs::create_dir_all(dir).map_err(|e| {
             Failure::input(format!(
@@ -95,41 +88,28 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
             ))
         })?;
     }
-    let structure = ModelStructure::eq22(&vehicle, cmd.options);
-    let request = FitRequest {
-        logs: cmd.logs.clone(),
-        vehicle: vehicle.clone(),
-        mapping: load_mapping(cmd.mapping.as_deref())?,
-        read: read_options(cmd.drop_invalid),
-        structure: structure.clone(),
-        fit: FitOptions::default(),
-        holdout: Holdout {
+    let mut job = Identification::new(vehicle)
+        .model_options(cmd.options)
+        .logs(cmd.logs.iter().cloned())
+        .read_options(read_options(cmd.drop_invalid))
+        .holdout(Holdout {
             segment_seconds: cmd.holdout_segment,
             ..Holdout::default()
-        },
-        validate: cmd.validate.clone(),
-        threads: cmd
-            .threads
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-            .max(1),
-        second_pass: true,
-        diagnose: cmd.diagnose.then(DiagnoseOptions::default),
-        progress: None,
-    };
-    let out = with_progress(request, cmd.quiet, pipeline::run)?;
-    let report = Report::new(
-        &vehicle,
-        &structure,
-        &out.fit,
-        &out.validation,
-        out.validation_samples,
-        &out.validation_source,
-        (&out.cross_validation.0, &out.cross_validation.1),
-        out.diagnostics.as_ref(),
-        out.diagnosis.as_ref(),
-    );
+        })
+        .diagnose(cmd.diagnose);
+    for log in &cmd.validate {
+        job = job.validate(log.clone());
+    }
+    if let Some(mapping) = load_mapping(cmd.mapping.as_deref())? {
+        job = job.mapping(mapping);
+    }
+    if let Some(threads) = cmd.threads {
+        job = job.threads(threads);
+    }
+    let results = with_progress(job, cmd.quiet, |job| job.run())?;
+    let report = results.report();
     if !cmd.quiet {
-        print_reader_notes(&out);
+        print_reader_notes(results.outcome());
         match (&report.diagnosis, diagnosis_only) {
             (Some(d), true) => print!("{}", tables::render_diagnosis(d)),
             (None, true) => println!("diagnosis skipped (--no-diagnose)"),
@@ -143,25 +123,30 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
             .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
     }
     if let Some(path) = &cmd.model_out {
-        identified(&vehicle, &structure, &out)
+        results
+            .to_identified_model()
             .save(path)
-            .map_err(|e| Failure::input(e.to_string()))?;
+            .map_err(mrsysid::Error::from)?;
     }
     if let Some(dir) = &cmd.plots {
-        write_plots(dir, &out).map_err(|e| Failure::input(e.to_string()))?;
+        write_plots(dir, results.outcome()).map_err(|e| Failure::input(e.to_string()))?;
     }
     Ok(())
 }
 
 /// Runs `job`, showing a spinner with the samples read on stderr once it has taken more
 /// than a second (not with `--quiet`, nor when stderr is not a terminal).
-fn with_progress<T>(mut request: FitRequest, quiet: bool, job: impl FnOnce(&FitRequest) -> T) -> T {
+fn with_progress<T>(
+    request: Identification,
+    quiet: bool,
+    job: impl FnOnce(&Identification) -> T,
+) -> T {
     use std::io::IsTerminal;
     if quiet || !std::io::stderr().is_terminal() {
         return job(&request);
     }
     let count = Arc::new(AtomicU64::new(0));
-    request.progress = Some(count.clone());
+    let request = request.progress(count.clone());
     let done = Arc::new(AtomicBool::new(false));
     let display = {
         let (count, done) = (count.clone(), done.clone());
@@ -190,22 +175,6 @@ fn with_progress<T>(mut request: FitRequest, quiet: bool, job: impl FnOnce(&FitR
     done.store(true, Ordering::Relaxed);
     let _ = display.join();
     result
-}
-
-/// The model to save: the diagnosis' augmented model when it added effects.
-fn identified(vehicle: &Vehicle, structure: &ModelStructure, out: &FitOutcome) -> IdentifiedModel {
-    match &out.diagnosis {
-        Some(d) if !d.effects_added.is_empty() => {
-            IdentifiedModel::new(vehicle.clone(), d.structure.clone(), &d.theta, &d.std)
-        }
-        _ => {
-            let mut std = vec![0.0; structure.params.len()];
-            for (p, &i) in out.fit.mmr.parameters.iter().zip(&out.fit.mmr.param_index) {
-                std[i] = p.std_error;
-            }
-            IdentifiedModel::new(vehicle.clone(), structure.clone(), &out.fit.mmr.theta, &std)
-        }
-    }
 }
 
 fn print_reader_notes(out: &FitOutcome) {

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::model::{Column, ModelError, ModelOptions, ModelStructure, Parameter, Workspace};
@@ -15,7 +16,7 @@ pub const MODEL_FILE_VERSION: u32 = 1;
 /// One estimated parameter as stored in the model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ParameterEstimate {
+pub struct StoredParameter {
     /// Parameter name (e.g. `C_T0`).
     pub name: String,
     /// Unit of the estimate ("-" for dimensionless).
@@ -39,7 +40,11 @@ struct ModelFile {
     /// data); a parameter without any term left is not in the model.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     left_out: Vec<LeftOutTerm>,
-    parameters: Vec<ParameterEstimate>,
+    parameters: Vec<StoredParameter>,
+    /// Parameter covariance (coloured-residual corrected), rows in `parameters` order;
+    /// absent in files written without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    covariance: Option<Vec<Vec<f64>>>,
 }
 
 /// A parameter's columns on one axis, left out of the model.
@@ -77,7 +82,11 @@ pub struct IdentifiedModel {
     /// The model structure the parameters belong to.
     pub structure: ModelStructure,
     /// Estimates and standard deviations, in `structure.params` order.
-    pub parameters: Vec<ParameterEstimate>,
+    pub parameters: Vec<StoredParameter>,
+    /// Parameter covariance in `structure.params` order (coloured-residual corrected
+    /// when it comes from [`crate::Results::to_identified_model`]), for prediction
+    /// intervals; `None` when not known.
+    pub covariance: Option<DMatrix<f64>>,
 }
 
 impl IdentifiedModel {
@@ -88,7 +97,7 @@ impl IdentifiedModel {
             .params
             .iter()
             .zip(theta.iter().zip(std))
-            .map(|(p, (&estimate, &std))| ParameterEstimate {
+            .map(|(p, (&estimate, &std))| StoredParameter {
                 name: p.name.clone(),
                 unit: p.unit.clone(),
                 estimate,
@@ -99,7 +108,15 @@ impl IdentifiedModel {
             vehicle,
             structure,
             parameters,
+            covariance: None,
         }
+    }
+
+    /// The model with parameter covariance `covariance` (n × n over
+    /// `structure.params`, units products of the parameters' units).
+    pub fn with_covariance(mut self, covariance: DMatrix<f64>) -> Self {
+        self.covariance = Some(covariance);
+        self
     }
 
     /// θ̂ in `structure.params` order.
@@ -152,10 +169,16 @@ impl IdentifiedModel {
                 p.name
             )));
         }
+        let covariance = file
+            .covariance
+            .map(|rows| covariance_matrix(rows, names.len()))
+            .transpose()
+            .map_err(err)?;
         Ok(Self {
             vehicle,
             structure,
             parameters: file.parameters,
+            covariance,
         })
     }
 
@@ -213,30 +236,50 @@ impl IdentifiedModel {
             extra,
             left_out,
             parameters: self.parameters.clone(),
+            covariance: self.covariance.as_ref().map(|c| {
+                (0..c.nrows())
+                    .map(|i| c.row(i).iter().copied().collect())
+                    .collect()
+            }),
         };
         let text = toml::to_string(&file).map_err(|e| err(e.to_string()))?;
         write_atomically(path, text.as_bytes()).map_err(|e| err(format!("cannot write file: {e}")))
     }
 
-    /// Force (N) and moment (N m) in body axes for body velocity `velocity` (m/s, air
-    /// relative), rates `rates` (rad/s), rotor speeds `omega` (rad/s) and rotor
-    /// accelerations `omega_dot` (rad/s², needed when J_z terms are modelled).
-    pub fn predict(
-        &self,
-        velocity: [f64; 3],
-        rates: [f64; 3],
-        omega: &[f64],
-        omega_dot: &[f64],
-    ) -> Result<([f64; 3], [f64; 3]), ModelError> {
-        let sample = Sample {
-            velocity,
-            rates,
-            omega: omega.to_vec(),
-            omega_dot: omega_dot.to_vec(),
-            ..Sample::default()
+    /// Force and moment `[F_x, F_y, F_z, M_x, M_y, M_z]` (N, N m, body axes) in the
+    /// state of `sample`: air-relative body velocity (m/s), rates (rad/s), rotor speeds
+    /// (rad/s), and where the model's terms need them rotor accelerations (rad/s²), CG
+    /// height (m) and attitude; its measured force and moment are ignored.
+    pub fn predict(&self, sample: &Sample) -> Result<[f64; 6], ModelError> {
+        let state = Sample {
+            wrench: [0.0; 6],
+            ..sample.clone()
         };
-        let y = self.structure.predict(&self.theta(), &sample)?;
-        Ok(([y[0], y[1], y[2]], [y[3], y[4], y[5]]))
+        self.structure.predict(&self.theta(), &state)
+    }
+
+    /// Standard deviation of the predicted mean force and moment in the state of
+    /// `sample` (N, N m), √(xᵀ C x) per axis from the parameter covariance C: the
+    /// model's parameter uncertainty, without the residual noise. `None` without a
+    /// covariance.
+    pub fn prediction_std(&self, sample: &Sample) -> Result<Option<[f64; 6]>, ModelError> {
+        let Some(c) = &self.covariance else {
+            return Ok(None);
+        };
+        let mut chunk = SampleChunk::with_capacity(sample.omega.len(), 1, !sample.omega_dot.is_empty());
+        chunk.push(sample);
+        let mut ws = Workspace::default();
+        self.structure.assemble(&chunk, &mut ws)?;
+        let n = self.structure.params.len();
+        Ok(Some(Axis::ALL.map(|axis| {
+            // Sensitivity of the axis' output to each parameter.
+            let mut x = vec![0.0; n];
+            for j in self.structure.axis_columns(axis) {
+                x[self.structure.columns[j].param] += ws.column(j)[0];
+            }
+            let x = DVector::from_vec(x);
+            (x.transpose() * c * &x)[(0, 0)].max(0.0).sqrt()
+        })))
     }
 
     /// Model output for every sample of `chunk`, in [`Axis`] order (N, N m), using `ws`
@@ -246,26 +289,7 @@ impl IdentifiedModel {
         chunk: &SampleChunk,
         ws: &mut Workspace,
     ) -> Result<[Vec<f64>; 6], ModelError> {
-        self.structure.assemble(chunk, ws)?;
-        let theta = self.theta();
-        let mut y: [Vec<f64>; 6] = Default::default();
-        for axis in Axis::ALL {
-            let a = axis as usize;
-            // Known terms: measured − corrected output.
-            let mut out: Vec<f64> = chunk.wrench[a]
-                .iter()
-                .zip(ws.output(axis))
-                .map(|(z, c)| z - c)
-                .collect();
-            for j in self.structure.axis_columns(axis) {
-                let th = theta[self.structure.columns[j].param];
-                out.iter_mut()
-                    .zip(ws.column(j))
-                    .for_each(|(o, x)| *o += th * x);
-            }
-            y[a] = out;
-        }
-        Ok(y)
+        self.structure.predict_chunk(&self.theta(), chunk, ws)
     }
 }
 
@@ -281,6 +305,19 @@ fn without(structure: &ModelStructure, left_out: &[LeftOutTerm]) -> ModelStructu
         })
         .collect();
     structure.select_columns(&keep)
+}
+
+/// The stored covariance rows as an n × n matrix, or why they are not one.
+fn covariance_matrix(rows: Vec<Vec<f64>>, n: usize) -> Result<DMatrix<f64>, String> {
+    if rows.len() != n || rows.iter().any(|r| r.len() != n) {
+        return Err(format!(
+            "covariance: expected {n} rows of {n} values (one per parameter)"
+        ));
+    }
+    if rows.iter().flatten().any(|v| !v.is_finite()) {
+        return Err("covariance: a value is not a finite number".into());
+    }
+    Ok(DMatrix::from_fn(n, n, |i, j| rows[i][j]))
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory and a rename.

@@ -261,6 +261,22 @@ pub enum ModelError {
         "the model needs rotor accelerations (the J_z * dr_dot term of Eq. 22f) but the data has none; derive them, or neglect the J_z terms"
     )]
     MissingRotorAcceleration,
+    /// A chunk whose signal vectors do not all hold one value per time stamp.
+    #[error("malformed sample chunk: signal {signal:?}: {problem}")]
+    ChunkShape {
+        /// The signal concerned.
+        signal: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// θ has another length than the structure's parameter list.
+    #[error("{found} parameter values for a model of {expected} parameters")]
+    ParameterCount {
+        /// Parameters of the structure.
+        expected: usize,
+        /// Values given.
+        found: usize,
+    },
 }
 
 /// The Eq. 22 model of one vehicle: parameters, columns per axis and known terms.
@@ -523,6 +539,8 @@ impl ModelStructure {
 
     /// Checks that `chunk` can be assembled with this structure.
     pub fn check_chunk(&self, chunk: &SampleChunk) -> Result<(), ModelError> {
+        crate::source::check_lengths(chunk)
+            .map_err(|(signal, problem)| ModelError::ChunkShape { signal, problem })?;
         if chunk.rotor_count() != self.rotor_count {
             return Err(ModelError::RotorCountMismatch {
                 expected: self.rotor_count,
@@ -723,17 +741,59 @@ impl ModelStructure {
             SampleChunk::with_capacity(sample.omega.len(), 1, !sample.omega_dot.is_empty());
         chunk.push(sample);
         let mut ws = Workspace::default();
-        self.assemble(&chunk, &mut ws)?;
-        let mut y = [0.0; 6];
-        for (j, col) in self.columns.iter().enumerate() {
-            y[col.axis as usize] += theta[col.param] * ws.column(j)[0];
-        }
-        for axis in Axis::ALL {
+        let y = self.predict_chunk(theta, &chunk, &mut ws)?;
+        Ok(y.map(|v| v[0]))
+    }
+
+    /// Model output of every sample of `chunk` per axis (N, N m), `ws` as scratch space.
+    pub fn predict_chunk(
+        &self,
+        theta: &[f64],
+        chunk: &SampleChunk,
+        ws: &mut Workspace,
+    ) -> Result<[Vec<f64>; 6], ModelError> {
+        self.check_theta(theta)?;
+        self.assemble(chunk, ws)?;
+        Ok(self.predict_assembled(theta, chunk, ws))
+    }
+
+    /// Model output of every sample of `chunk` whose regressors `ws` holds (assembled by
+    /// this structure): Σ θ x over the axis' columns plus the known terms (the measured
+    /// output less the known-term-corrected one). The one prediction routine of the
+    /// crate.
+    pub fn predict_assembled(
+        &self,
+        theta: &[f64],
+        chunk: &SampleChunk,
+        ws: &Workspace,
+    ) -> [Vec<f64>; 6] {
+        Axis::ALL.map(|axis| {
             let a = axis as usize;
-            // known part = measured − corrected output
-            y[a] += chunk.wrench[a][0] - ws.output(axis)[0];
+            let mut y: Vec<f64> = chunk.wrench[a]
+                .iter()
+                .zip(ws.output(axis))
+                .map(|(z, c)| z - c)
+                .collect();
+            for j in self.axis_columns(axis) {
+                let th = theta[self.columns[j].param];
+                y.iter_mut()
+                    .zip(ws.column(j))
+                    .for_each(|(o, x)| *o += th * x);
+            }
+            y
+        })
+    }
+
+    /// θ holds one value per parameter.
+    fn check_theta(&self, theta: &[f64]) -> Result<(), ModelError> {
+        if theta.len() == self.params.len() {
+            Ok(())
+        } else {
+            Err(ModelError::ParameterCount {
+                expected: self.params.len(),
+                found: theta.len(),
+            })
         }
-        Ok(y)
     }
 }
 

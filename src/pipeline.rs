@@ -8,7 +8,6 @@
 //! 20 % of the data in 2 s segments by default. Rows of a time series are never
 //! sampled at random.
 
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -18,14 +17,16 @@ use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
     SCREENING_SAMPLES, Thinned, candidate_set, diagnose,
 };
+use crate::error::{Error, RequestError};
 use crate::estimate::{
     self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, FitOptions, Folds,
     ResidualDiagnostics, ResidualPass,
 };
 use crate::io::{self, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Workspace};
-use crate::sample::{Axis, SampleChunk};
-use crate::stats::Accumulator;
+use crate::sample::SampleChunk;
+use crate::source::LogSource;
+use crate::stats::{AccumulateError, Accumulator};
 use crate::vehicle::Vehicle;
 
 /// Time-segment hold-out of the fit logs.
@@ -58,7 +59,7 @@ impl Holdout {
 #[derive(Debug, Clone)]
 pub struct FitRequest {
     /// Logs to fit.
-    pub logs: Vec<PathBuf>,
+    pub logs: Vec<LogSource>,
     /// The vehicle.
     pub vehicle: Vehicle,
     /// Mapping for logs that do not follow the contract.
@@ -72,7 +73,7 @@ pub struct FitRequest {
     /// Segment hold-out of a single fit log (cross-validation of one log).
     pub holdout: Holdout,
     /// Reporting-only validation logs: evaluated, never used for a decision.
-    pub validate: Vec<PathBuf>,
+    pub validate: Vec<LogSource>,
     /// Reader threads (≥ 1).
     pub threads: usize,
     /// Run the second pass (residual diagnostics, plot series).
@@ -81,27 +82,6 @@ pub struct FitRequest {
     pub diagnose: Option<DiagnoseOptions>,
     /// Samples read so far, over both passes, for a progress display.
     pub progress: Option<Arc<AtomicU64>>,
-}
-
-/// A failure of the pipeline, with the exit code it maps to.
-#[derive(Debug, thiserror::Error)]
-pub enum PipelineError {
-    /// Bad input file (exit code 2).
-    #[error("{0}")]
-    Input(String),
-    /// The data cannot support the fit (exit code 1).
-    #[error("{0}")]
-    Fit(String),
-}
-
-impl PipelineError {
-    /// Process exit code: 2 for bad input, 1 for a failed fit.
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            Self::Input(_) => 2,
-            Self::Fit(_) => 1,
-        }
-    }
 }
 
 /// Decimated measured/predicted series for plots, per axis.
@@ -143,6 +123,10 @@ pub struct FitOutcome {
     pub validation_source: String,
     /// Closing-the-loop result.
     pub diagnosis: Option<Diagnosis>,
+    /// Coloured-residual variance inflation κ = (1 + ρ)/(1 − ρ) of the Eq. 22 fit's
+    /// residuals (ρ the largest lag-1 autocorrelation over the axes), ≥ 1; 1 when the
+    /// second pass did not run. σ² of white residuals times κ is the corrected variance.
+    pub variance_inflation: f64,
 }
 
 /// Statistics of one log: the samples fitted and those held out (its hold-out segments,
@@ -180,27 +164,36 @@ impl OptionalSignals {
 #[derive(Debug, Clone, Copy)]
 struct LogCounts([u64; 2]);
 
-fn input_error(e: impl std::fmt::Display) -> PipelineError {
-    PipelineError::Input(e.to_string())
+/// The error of accumulating a chunk of the log `source`.
+fn accumulate_error(source: &LogSource) -> impl Fn(AccumulateError) -> Error + '_ {
+    move |e| Error::Accumulate {
+        log: source.name(),
+        source: e,
+    }
 }
 
-/// Opens a log; its CSV tokeniser gets a thread of its own only with `spare_thread`
-/// (the thread budget allows it), so `--threads N` bounds the threads at work.
-fn open(path: &Path, req: &FitRequest, spare_thread: bool) -> Result<LogReader, PipelineError> {
+/// Opens a log file; its CSV tokeniser gets a thread of its own only with
+/// `spare_thread` (the thread budget allows it), so `threads` bounds the threads at work.
+fn open(path: &std::path::Path, req: &FitRequest, spare_thread: bool) -> Result<LogReader, Error> {
     let read = ReadOptions {
         reader_thread: req.read.reader_thread && spare_thread,
         ..req.read
     };
-    io::open_log(path, &req.vehicle, req.mapping.as_ref(), &read).map_err(input_error)
+    Ok(io::open_log(
+        path,
+        &req.vehicle,
+        req.mapping.as_ref(),
+        &read,
+    )?)
 }
 
 /// Reads one log, routing each sample to the fit or validation statistics.
 fn read_log(
-    path: &Path,
+    source: &LogSource,
     role: Role,
     req: &FitRequest,
     overlap: bool,
-) -> Result<LogStats, PipelineError> {
+) -> Result<LogStats, Error> {
     let mut fit = Accumulator::new(&req.structure);
     let mut held_out = Accumulator::new(&req.structure);
     let mut signals = None;
@@ -217,9 +210,10 @@ fn read_log(
             }
             &mut fit
         };
-        acc.push(&req.structure, part, &mut ws).map_err(input_error)
+        acc.push(&req.structure, part, &mut ws)
+            .map_err(accumulate_error(source))
     };
-    let summary = stream_log(path, req, overlap, |chunk| {
+    let summary = stream_log(source, req, overlap, |chunk| {
         signals.get_or_insert_with(|| OptionalSignals::of(chunk));
         split.route(chunk, &mut sink)
     })?;
@@ -236,24 +230,35 @@ fn read_log(
 /// Chunks in flight between a log's reader thread and its consumer.
 const CHUNKS_IN_FLIGHT: usize = 4;
 
-/// Feeds the coalesced chunks of the log at `path` to `consume` in order and returns the
-/// reader's summary. With `overlap`, reading and parsing run on a thread of their own
+/// Feeds the log `source` to `consume` in chunks of [`CHUNK_SAMPLES`] (the last one
+/// shorter) and returns the reader's summary. The chunks do not depend on how the reader
+/// or the caller chunked the samples, so a log gives the same statistics from a file and
+/// from memory. With `overlap`, reading and parsing a file run on a thread of their own
 /// that hands chunks over a bounded channel, so parsing overlaps the consumer's work
 /// (memory stays at [`CHUNKS_IN_FLIGHT`] chunks).
 fn stream_log(
-    path: &Path,
+    source: &LogSource,
     req: &FitRequest,
     overlap: bool,
-    mut consume: impl FnMut(&SampleChunk) -> Result<(), PipelineError>,
-) -> Result<Summary, PipelineError> {
+    mut consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
+) -> Result<Summary, Error> {
     let mut feed = |chunk: Result<SampleChunk, io::IoError>| {
-        let chunk = chunk.map_err(input_error)?;
+        let chunk = chunk?;
         count_progress(req, &chunk);
         consume(&chunk)
     };
+    let path = match source {
+        LogSource::File(path) => path,
+        LogSource::Memory(log) => {
+            for chunk in rechunk(log.chunks().iter().cloned().map(Ok)) {
+                feed(chunk)?;
+            }
+            return Ok(Summary::of_memory(log.name(), log.len()));
+        }
+    };
     if !overlap {
         let mut reader = open(path, req, false)?;
-        for chunk in coalesce(reader.by_ref()) {
+        for chunk in rechunk(reader.by_ref()) {
             feed(chunk)?;
         }
         return Ok(reader.summary().clone());
@@ -261,9 +266,9 @@ fn stream_log(
     let (tx, rx) = std::sync::mpsc::sync_channel(CHUNKS_IN_FLIGHT);
     std::thread::scope(|scope| {
         // The reader is opened on its own thread (it is not `Send`).
-        let producer = scope.spawn(move || -> Result<Summary, PipelineError> {
+        let producer = scope.spawn(move || -> Result<Summary, Error> {
             let mut reader = open(path, req, true)?;
-            for chunk in coalesce(reader.by_ref()) {
+            for chunk in rechunk(reader.by_ref()) {
                 let failed = chunk.is_err();
                 // A closed channel means the consumer stopped on an error of its own.
                 if tx.send(chunk).is_err() || failed {
@@ -282,40 +287,53 @@ fn stream_log(
         drop(rx);
         let summary = producer
             .join()
-            .unwrap_or_else(|_| Err(PipelineError::Fit("a reader thread stopped".into())));
+            .unwrap_or_else(|_| Err(RequestError::WorkerStopped.into()));
         consumed.and(summary)
     })
 }
 
-/// Concatenates consecutive chunks of one log (across segment boundaries) into chunks of
-/// at least [`CHUNK_SAMPLES`] samples. The statistics do not depend on chunking, while a
-/// log of one-sample segments (a sweep, whose rows are independent test points) would
-/// otherwise cost one factorisation update per sample. Residual autocorrelation lags then
-/// run across segment joins, a negligible share of the lag products.
-fn coalesce<I>(mut chunks: I) -> impl Iterator<Item = Result<SampleChunk, io::IoError>>
+/// Re-cuts the chunks of one log (across segment boundaries) into chunks of exactly
+/// [`CHUNK_SAMPLES`] samples, the last one shorter. The factorisation is updated once
+/// per chunk, so fixed chunks make the statistics a function of the sample sequence
+/// alone, bit for bit, whoever produced it; and a log of one-sample segments (a sweep,
+/// whose rows are independent test points) costs one update per chunk, not per sample.
+/// Residual autocorrelation lags then run across segment joins, a negligible share of
+/// the lag products.
+fn rechunk<I>(mut chunks: I) -> impl Iterator<Item = Result<SampleChunk, io::IoError>>
 where
     I: Iterator<Item = Result<SampleChunk, io::IoError>>,
 {
-    let mut pending: Option<SampleChunk> = None;
+    let mut pending = SampleChunk::default();
+    // The input chunk being cut, and the first of its samples not yet taken.
+    let mut current: Option<(SampleChunk, usize)> = None;
     let mut done = false;
     std::iter::from_fn(move || {
-        while !done {
-            match chunks.next() {
-                Some(Ok(c)) => {
-                    let buf = pending.get_or_insert_with(SampleChunk::default);
-                    buf.extend_from(&c, 0..c.len());
-                    if buf.len() >= CHUNK_SAMPLES {
-                        return pending.take().map(Ok);
-                    }
+        loop {
+            if let Some((c, start)) = current.as_mut() {
+                let take = (CHUNK_SAMPLES - pending.len()).min(c.len() - *start);
+                pending.extend_from(c, *start..*start + take);
+                *start += take;
+                if *start == c.len() {
+                    current = None;
                 }
+                if pending.len() == CHUNK_SAMPLES {
+                    return Some(Ok(std::mem::take(&mut pending)));
+                }
+                continue;
+            }
+            if done {
+                return (!pending.is_empty()).then(|| Ok(std::mem::take(&mut pending)));
+            }
+            match chunks.next() {
+                Some(Ok(c)) => current = Some((c, 0)),
                 Some(Err(e)) => {
                     done = true;
+                    pending.clear();
                     return Some(Err(e));
                 }
                 None => done = true,
             }
         }
-        pending.take().filter(|c| !c.is_empty()).map(Ok)
     })
 }
 
@@ -360,8 +378,8 @@ impl Splitter {
     fn route(
         &mut self,
         chunk: &SampleChunk,
-        sink: &mut impl FnMut(&SampleChunk, bool) -> Result<(), PipelineError>,
-    ) -> Result<(), PipelineError> {
+        sink: &mut impl FnMut(&SampleChunk, bool) -> Result<(), Error>,
+    ) -> Result<(), Error> {
         let holdout = match self.role {
             Role::Fit => return sink(chunk, false),
             Role::Validation => return sink(chunk, true),
@@ -392,8 +410,8 @@ impl Splitter {
     /// Hands over the samples still waiting.
     fn finish(
         &mut self,
-        sink: &mut impl FnMut(&SampleChunk, bool) -> Result<(), PipelineError>,
-    ) -> Result<(), PipelineError> {
+        sink: &mut impl FnMut(&SampleChunk, bool) -> Result<(), Error>,
+    ) -> Result<(), Error> {
         for (k, part) in self.parts.iter_mut().enumerate() {
             if !part.is_empty() {
                 sink(part, k == 1)?;
@@ -409,12 +427,12 @@ impl Splitter {
 /// scheduling. `overlap` tells a job it may spend a second thread on reading (when there
 /// are at least twice as many threads as logs being worked on).
 fn run_jobs<T: Send>(
-    jobs: &[(PathBuf, Role)],
+    jobs: &[(LogSource, Role)],
     req: &FitRequest,
-    per_log: impl Fn(usize, &Path, Role, bool) -> Result<T, PipelineError> + Sync,
-) -> Result<Vec<T>, PipelineError> {
+    per_log: impl Fn(usize, &LogSource, Role, bool) -> Result<T, Error> + Sync,
+) -> Result<Vec<T>, Error> {
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<T, PipelineError>>>> =
+    let results: Mutex<Vec<Option<Result<T, Error>>>> =
         Mutex::new((0..jobs.len()).map(|_| None).collect());
     let threads = req.threads.max(1);
     let workers = threads.min(jobs.len().max(1));
@@ -437,12 +455,12 @@ fn run_jobs<T: Send>(
         .into_inner()
         .unwrap_or_else(|e| e.into_inner())
         .into_iter()
-        .map(|r| r.unwrap_or_else(|| Err(PipelineError::Fit("a reader thread stopped".into()))))
+        .map(|r| r.unwrap_or_else(|| Err(RequestError::WorkerStopped.into())))
         .collect()
 }
 
 /// Fit logs first (a single one split by the hold-out), then the validation logs.
-fn jobs(req: &FitRequest) -> Vec<(PathBuf, Role)> {
+fn jobs(req: &FitRequest) -> Vec<(LogSource, Role)> {
     let fit_role = if req.logs.len() == 1 {
         Role::Split(req.holdout)
     } else {
@@ -455,32 +473,31 @@ fn jobs(req: &FitRequest) -> Vec<(PathBuf, Role)> {
         .collect()
 }
 
-/// Display name of a log: its file name.
-fn log_name(path: &Path) -> String {
-    path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into(),
-    )
+/// Merges statistics of the same structure (they always have its shape).
+fn merge(into: &mut Accumulator, other: &Accumulator) -> Result<(), Error> {
+    into.merge(other).map_err(|source| Error::Accumulate {
+        log: "merged statistics".into(),
+        source,
+    })
 }
 
 /// The fit logs' statistics ((fit, held-out) per log, job order) arranged for
 /// cross-validation and the final fit: leave one log out with two or more logs, else the
 /// log's hold-out segments. Returns the folds and the final fit data: all fit logs, the
 /// held-out segments of a single log included only when validation logs report instead.
-fn arrange(
-    req: &FitRequest,
-    parts: &[[&Accumulator; 2]],
-) -> Result<(Folds, Accumulator), PipelineError> {
-    let merged = |pair: &[&Accumulator; 2]| -> Result<Accumulator, PipelineError> {
+fn arrange(req: &FitRequest, parts: &[[&Accumulator; 2]]) -> Result<(Folds, Accumulator), Error> {
+    let merged = |pair: &[&Accumulator; 2]| -> Result<Accumulator, Error> {
         let mut a = pair[0].clone();
-        a.merge(pair[1]).map_err(input_error)?;
+        merge(&mut a, pair[1])?;
         Ok(a)
     };
     if let [single] = parts {
         if single[1].count() == 0 {
-            return Err(PipelineError::Fit(
-                "no held-out samples: the log is shorter than one hold-out cycle; give two or more logs (each is then predicted from the others) or a shorter --holdout-segment".into(),
-            ));
+            return Err(RequestError::HoldoutTooShort {
+                segment_seconds: req.holdout.segment_seconds,
+                every: req.holdout.every,
+            }
+            .into());
         }
         let folds = Folds::holdout("hold-out segments", single[0].clone(), single[1].clone());
         let fit = if req.validate.is_empty() {
@@ -493,18 +510,41 @@ fn arrange(
     let logs = parts
         .iter()
         .zip(&req.logs)
-        .map(|(pair, path)| Ok((log_name(path), merged(pair)?)))
-        .collect::<Result<Vec<_>, PipelineError>>()?;
-    let folds = Folds::leave_one_out(&logs).map_err(input_error)?;
+        .map(|(pair, source)| Ok((source.name(), merged(pair)?)))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let folds = Folds::leave_one_out(&logs).map_err(|source| Error::Accumulate {
+        log: "leave-one-out folds".into(),
+        source,
+    })?;
     let mut fit = logs[0].1.clone();
     for (_, a) in &logs[1..] {
-        fit.merge(a).map_err(input_error)?;
+        merge(&mut fit, a)?;
     }
     Ok((folds, fit))
 }
 
+/// Refuses a request that cannot be carried out, before any log is read.
+fn check(req: &FitRequest) -> Result<(), RequestError> {
+    if req.logs.is_empty() {
+        return Err(RequestError::NoLogs);
+    }
+    let h = req.holdout;
+    if !(h.segment_seconds.is_finite() && h.segment_seconds > 0.0 && h.every >= 2) {
+        return Err(RequestError::InvalidHoldout {
+            segment_seconds: h.segment_seconds,
+            every: h.every,
+        });
+    }
+    let (structure, vehicle) = (req.structure.rotor_count(), req.vehicle.rotor_count());
+    if structure != vehicle {
+        return Err(RequestError::StructureMismatch { structure, vehicle });
+    }
+    Ok(())
+}
+
 /// Runs the pipeline.
-pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
+pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
+    check(req)?;
     let jobs = jobs(req);
     let per_log = run_jobs(&jobs, req, |_, path, role, overlap| {
         read_log(path, role, req, overlap)
@@ -517,7 +557,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
         screening.merge(&s.screening);
     }
     for s in &per_log[n_fit..] {
-        validation_stats.merge(&s.held_out).map_err(input_error)?;
+        merge(&mut validation_stats, &s.held_out)?;
     }
     let counts: Vec<LogCounts> = per_log
         .iter()
@@ -528,16 +568,14 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
         .map(|s| [&s.fit, &s.held_out])
         .collect();
     if parts.iter().all(|p| p[0].count() + p[1].count() == 0) {
-        return Err(PipelineError::Fit("no samples to fit".into()));
+        return Err(RequestError::NoSamples.into());
     }
     let (folds, fit_stats) = arrange(req, &parts)?;
     let summaries = per_log.into_iter().map(|s| s.summary).collect();
-    let fit_error = |e: estimate::EstimateError| PipelineError::Fit(e.to_string());
-    let fit = estimate::fit(&req.structure, &fit_stats, &req.fit).map_err(fit_error)?;
-    let cv = estimate::cross_validate(&req.structure, &folds, &req.fit).map_err(fit_error)?;
+    let fit = estimate::fit(&req.structure, &fit_stats, &req.fit)?;
+    let cv = estimate::cross_validate(&req.structure, &folds, &req.fit)?;
     let (validation, validation_samples) = if validation_stats.count() > 0 {
-        let v = estimate::evaluate(&req.structure, &fit.mmr.theta, &validation_stats)
-            .map_err(fit_error)?;
+        let v = estimate::evaluate(&req.structure, &fit.mmr.theta, &validation_stats)?;
         (v, validation_stats.count())
     } else {
         (cv.pooled_metrics(), folds.test_samples())
@@ -570,6 +608,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, PipelineError> {
         summaries,
         validation_source,
         diagnosis: None,
+        variance_inflation: 1.0,
     };
     if req.second_pass || req.diagnose.is_some() {
         second_pass(
@@ -603,7 +642,7 @@ impl Extended {
         signals: OptionalSignals,
         screening: &SampleChunk,
         options: &DiagnoseOptions,
-    ) -> Result<Self, PipelineError> {
+    ) -> Result<Self, Error> {
         let ctx = CandidateContext {
             vehicle: &req.vehicle,
             structure: &req.structure,
@@ -612,7 +651,7 @@ impl Extended {
             has_omega_dot: signals.omega_dot,
             has_attitude: signals.attitude,
         };
-        let set = candidate_set(&ctx, Some(screening), options).map_err(input_error)?;
+        let set = candidate_set(&ctx, Some(screening), options)?;
         Ok(Self {
             structure: set.extended,
             candidates: set.candidates,
@@ -652,12 +691,12 @@ struct LogPass {
 /// does not depend on the thread count.
 fn second_pass(
     req: &FitRequest,
-    jobs: &[(PathBuf, Role)],
+    jobs: &[(LogSource, Role)],
     counts: &[LogCounts],
     signals: Option<OptionalSignals>,
     screening: &SampleChunk,
     out: &mut FitOutcome,
-) -> Result<(), PipelineError> {
+) -> Result<(), Error> {
     let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
     let ctx = PassContext {
         req,
@@ -701,6 +740,7 @@ fn second_pass(
     };
     let diagnostics = residuals.finish();
     let inflation = coloured_variance_inflation(&diagnostics);
+    out.variance_inflation = inflation;
     out.diagnostics = Some(diagnostics);
     let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
         return Ok(());
@@ -714,7 +754,7 @@ fn second_pass(
     let (folds, fit) = arrange(req, &parts)?;
     let mut report = Accumulator::new(&ext.structure);
     for [_, held_out] in &per_log[n_fit..] {
-        report.merge(held_out).map_err(input_error)?;
+        merge(&mut report, held_out)?;
     }
     options.variance_inflation = options.variance_inflation.max(inflation);
     let stats = CandidateStatistics {
@@ -726,8 +766,7 @@ fn second_pass(
         folds: &folds,
         report: (report.count() > 0).then_some(&report),
     };
-    out.diagnosis =
-        Some(diagnose(&stats, &req.fit, &options).map_err(|e| PipelineError::Fit(e.to_string()))?);
+    out.diagnosis = Some(diagnose(&stats, &req.fit, &options)?);
     Ok(())
 }
 
@@ -757,11 +796,11 @@ fn lay_end_to_end(
 /// before it.
 fn pass_log(
     ctx: &PassContext,
-    path: &Path,
+    source: &LogSource,
     role: Role,
     overlap: bool,
     mut seen: [u64; 2],
-) -> Result<LogPass, PipelineError> {
+) -> Result<LogPass, Error> {
     let req = ctx.req;
     let mut share = LogPass {
         residuals: ctx.residuals.clone(),
@@ -776,18 +815,21 @@ fn pass_log(
     };
     let mut ws = Workspace::default();
     let mut split = Splitter::new(role);
-    let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), PipelineError> {
+    let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), Error> {
         let k = usize::from(to_validation);
         if let (Some(ext), Some(acc)) = (&ctx.extended, share.candidates.as_mut()) {
             acc[k]
                 .push(&ext.structure, part, &mut ws)
-                .map_err(input_error)?;
+                .map_err(accumulate_error(source))?;
         }
         // Leaves the base regressors of `part` in `ws` for the plotted predictions.
         if to_validation {
-            req.structure.assemble(part, &mut ws).map_err(input_error)?;
+            req.structure.assemble(part, &mut ws)?;
         } else {
-            share.residuals.push(part, &mut ws).map_err(input_error)?;
+            share
+                .residuals
+                .push(part, &mut ws)
+                .map_err(accumulate_error(source))?;
         }
         let span = &mut share.span[k];
         if span.0.is_nan() {
@@ -795,32 +837,22 @@ fn pass_log(
         }
         span.1 = part.t[part.len() - 1];
         let series = &mut share.series[k];
+        let predicted = req.structure.predict_assembled(ctx.theta, part, &ws);
         for (i, &t) in part.t.iter().enumerate() {
             if (seen[k] + i as u64).is_multiple_of(ctx.strides[k]) {
                 series.t.push(t - span.0);
-                for a in Axis::ALL {
-                    series.measured[a as usize].push(part.wrench[a as usize][i]);
-                    series.predicted[a as usize].push(predicted(ctx, &ws, part, a, i));
+                for (a, y) in predicted.iter().enumerate() {
+                    series.measured[a].push(part.wrench[a][i]);
+                    series.predicted[a].push(y[i]);
                 }
             }
         }
         seen[k] += part.len() as u64;
         Ok(())
     };
-    stream_log(path, req, overlap, |chunk| split.route(chunk, &mut sink))?;
+    stream_log(source, req, overlap, |chunk| split.route(chunk, &mut sink))?;
     split.finish(&mut sink)?;
     Ok(share)
-}
-
-/// Model output of `axis` for sample `i` of `part`, whose base regressors are in `ws`:
-/// the measured output less the corrected one (the known terms) plus Σ θ̂ x.
-fn predicted(ctx: &PassContext, ws: &Workspace, part: &SampleChunk, axis: Axis, i: usize) -> f64 {
-    let structure = &ctx.req.structure;
-    let mut y = part.wrench[axis as usize][i] - ws.output(axis)[i];
-    for j in structure.axis_columns(axis) {
-        y += ctx.theta[structure.columns[j].param] * ws.column(j)[i];
-    }
-    y
 }
 
 /// (1 + ρ)/(1 − ρ) for the largest lag-1 residual autocorrelation ρ over the axes (an

@@ -4,7 +4,7 @@
 use mrsysid::identified::IdentifiedModel;
 use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
 use mrsysid::rotor::BladeConstants;
-use mrsysid::sample::{Sample, SampleChunk};
+use mrsysid::sample::{Axis, Sample, SampleChunk};
 use mrsysid::vehicle::Vehicle;
 
 fn quad() -> Vehicle {
@@ -48,22 +48,59 @@ fn round_trip_preserves_predictions_exactly() {
     m.save(&path).unwrap();
     let back = IdentifiedModel::load(&path).unwrap();
     assert_eq!(back.parameters, m.parameters);
-    let omega = [900.0, 950.0, 1000.0, 1050.0];
-    let a = m
-        .predict([5.0, -1.0, 0.5], [0.3, -0.2, 0.1], &omega, &[10.0; 4])
-        .unwrap();
-    let b = back
-        .predict([5.0, -1.0, 0.5], [0.3, -0.2, 0.1], &omega, &[10.0; 4])
-        .unwrap();
+    let s = state([5.0, -1.0, 0.5], [0.3, -0.2, 0.1], &[900.0, 950.0, 1000.0, 1050.0]);
+    let a = m.predict(&s).unwrap();
+    let b = back.predict(&s).unwrap();
     // TOML stores f64 with round-trip precision, so predictions are bit-identical.
     assert_eq!(a, b);
     // Equal rotor speeds at rest give upward thrust (F_z < 0) and zero moments; at
     // 2000 rad/s (λ = ν0/ΩR ≈ 0.077) these blade constants lift.
-    let (f, mo) = back
-        .predict([0.0; 3], [0.0; 3], &[2000.0; 4], &[0.0; 4])
-        .unwrap();
-    assert!(f[2] < -1.0, "{f:?}");
-    assert!(mo.iter().all(|x| x.abs() < 1e-9), "{mo:?}");
+    let y = back.predict(&state([0.0; 3], [0.0; 3], &[2000.0; 4])).unwrap();
+    assert!(y[2] < -1.0, "{y:?}");
+    assert!(y[3..].iter().all(|x| x.abs() < 1e-9), "{y:?}");
+}
+
+/// A state with rotor accelerations 10 rad/s² (the J_z terms need them).
+fn state(velocity: [f64; 3], rates: [f64; 3], omega: &[f64]) -> Sample {
+    Sample {
+        velocity,
+        rates,
+        omega: omega.to_vec(),
+        omega_dot: vec![10.0; omega.len()],
+        ..Sample::default()
+    }
+}
+
+#[test]
+fn covariance_round_trips_and_gives_prediction_sigma() {
+    // A diagonal covariance: the predicted F_z's σ is then √(Σ_p x_p² σ_p²) over the
+    // parameters with an F_z column, computed here from the model's own regressors.
+    let m = model();
+    let n = m.structure.params.len();
+    let sigma: Vec<f64> = (0..n).map(|i| 1e-3 * (1.0 + i as f64)).collect();
+    let m = m.with_covariance(nalgebra::DMatrix::from_fn(n, n, |i, j| {
+        if i == j { sigma[i] * sigma[i] } else { 0.0 }
+    }));
+    let path = tmp("covariance.toml");
+    m.save(&path).unwrap();
+    let back = IdentifiedModel::load(&path).unwrap();
+    assert_eq!(back.covariance, m.covariance, "TOML keeps f64 exactly");
+    let s = state([4.0, 1.0, -0.5], [0.2, -0.1, 0.3], &[900.0, 1000.0, 1100.0, 950.0]);
+    let std = back.prediction_std(&s).unwrap().expect("a covariance");
+    let mut chunk = SampleChunk::with_capacity(4, 1, true);
+    chunk.push(&s);
+    let mut ws = Workspace::default();
+    m.structure.assemble(&chunk, &mut ws).unwrap();
+    let mut x = vec![0.0; n];
+    for j in m.structure.axis_columns(Axis::Fz) {
+        x[m.structure.columns[j].param] += ws.column(j)[0];
+    }
+    let expect = x.iter().zip(&sigma).map(|(x, s)| (x * s).powi(2)).sum::<f64>().sqrt();
+    assert!(expect > 0.0);
+    assert!((std[2] - expect).abs() <= 1e-12 * expect, "{} vs {expect}", std[2]);
+    // Without a covariance there is no interval.
+    assert_eq!(model().prediction_std(&s).unwrap(), None);
+    let _ = std::fs::remove_file(&path);
 }
 
 #[test]
@@ -79,10 +116,8 @@ fn chunk_prediction_equals_single_sample_prediction() {
     let mut chunk = SampleChunk::with_capacity(4, 1, true);
     chunk.push(&s);
     let y = m.predict_chunk(&chunk, &mut Workspace::default()).unwrap();
-    let (f, mo) = m
-        .predict(s.velocity, s.rates, &s.omega, &s.omega_dot)
-        .unwrap();
-    for (a, v) in f.iter().chain(&mo).enumerate() {
+    let single = m.predict(&s).unwrap();
+    for (a, v) in single.iter().enumerate() {
         assert!(
             (y[a][0] - v).abs() <= 1e-12 * v.abs().max(1e-9),
             "axis {a}: {} vs {v}",
@@ -167,22 +202,23 @@ fn added_effect_columns_survive_the_model_file() {
     aug.save(&path).unwrap();
     let back = IdentifiedModel::load(&path).unwrap();
     assert_eq!(back.parameters, aug.parameters);
-    let args = (
-        [12.0, 1.0, 0.5],
-        [0.2, 0.1, 0.0],
-        [900.0, 1000.0, 1100.0, 1200.0],
-        [0.0; 4],
-    );
-    let a = aug.predict(args.0, args.1, &args.2, &args.3).unwrap();
-    let b = back.predict(args.0, args.1, &args.2, &args.3).unwrap();
+    let args = Sample {
+        velocity: [12.0, 1.0, 0.5],
+        rates: [0.2, 0.1, 0.0],
+        omega: vec![900.0, 1000.0, 1100.0, 1200.0],
+        omega_dot: vec![0.0; 4],
+        ..Sample::default()
+    };
+    let a = aug.predict(&args).unwrap();
+    let b = back.predict(&args).unwrap();
     assert_eq!(a, b);
     // The extra terms act: F_x gains −ρ/2 CdA u|u| = −0.6125·0.02·144 N.
-    let plain = m.predict(args.0, args.1, &args.2, &args.3).unwrap();
+    let plain = m.predict(&args).unwrap();
     let expect = -0.6125 * 0.02 * 144.0;
     assert!(
-        (a.0[0] - plain.0[0] - expect).abs() < 1e-9,
+        (a[0] - plain[0] - expect).abs() < 1e-9,
         "{} vs {}",
-        a.0[0] - plain.0[0],
+        a[0] - plain[0],
         expect
     );
 }

@@ -37,14 +37,14 @@ fn request(logs: &[&Path], validate: &[&Path], threads: usize) -> FitRequest {
         Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle");
     let structure = ModelStructure::eq22(&vehicle, ModelOptions::default());
     FitRequest {
-        logs: logs.iter().map(|p| p.to_path_buf()).collect(),
+        logs: logs.iter().map(|&p| p.into()).collect(),
         vehicle,
         mapping: None,
         read: ReadOptions::default(),
         structure,
         fit: FitOptions::default(),
         holdout: Holdout::default(),
-        validate: validate.iter().map(|p| p.to_path_buf()).collect(),
+        validate: validate.iter().map(|&p| p.into()).collect(),
         threads,
         second_pass: true,
         diagnose: Some(DiagnoseOptions::default()),

@@ -10,7 +10,7 @@ pub use candidates::{Candidate, CandidateContext, CandidateParameter, EffectKind
 pub use generic::{SCREENING_SAMPLES, Thinned};
 pub use procedure::{
     CandidateScore, CandidateStatistics, DiagnoseError, DiagnoseOptions, Diagnosis, DiagnosisStep,
-    EffectParameter, diagnose, diagnose_chunks,
+    EffectParameter, Rejection, diagnose, diagnose_chunks,
 };
 
 use crate::model::{ModelError, ModelStructure, Parameter};

@@ -50,10 +50,10 @@ use serde::Serialize;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use super::candidates::{Candidate, EffectKind};
-use crate::estimate::{self, AxisMetrics, CrossValidation, FitOptions, Folds};
+use crate::estimate::{self, AxisMetrics, CrossValidation, EstimateError, Fit, FitOptions, Folds};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
-use crate::stats::Accumulator;
+use crate::stats::{AccumulateError, Accumulator};
 
 /// Thresholds of the procedure.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -120,8 +120,81 @@ pub struct CandidateScore {
     /// P-value of the joint Wald test that all its parameters are zero (one test per
     /// candidate, however many parameters it has).
     pub p: f64,
-    /// Why it was not accepted (empty when it was acceptable).
-    pub rejected: String,
+    /// Why it was not accepted (`None` when it was acceptable).
+    pub rejected: Option<Rejection>,
+}
+
+/// Why a candidate effect was not accepted in a step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum Rejection {
+    /// Its model could not be estimated (the message says why).
+    NotEstimable(String),
+    /// The joint Wald test does not reject "all its parameters are zero".
+    NotSignificant {
+        /// P-value of the joint test.
+        p: f64,
+        /// The (multiple-testing corrected) level it had to beat.
+        level: f64,
+    },
+    /// A parameter outside its physical range.
+    Implausible {
+        /// Parameter name.
+        parameter: String,
+        /// Its estimate, in `unit`.
+        value: f64,
+        /// Unit of the estimate.
+        unit: String,
+    },
+    /// No axis gains enough cross-validated NRMSE.
+    SmallGain {
+        /// Largest relative gain over the axes.
+        gain: f64,
+        /// Gain required.
+        required: f64,
+    },
+    /// The gains summed over the axes (losses negative) are too small.
+    SmallNetGain {
+        /// Summed gain.
+        gain: f64,
+        /// Gain required.
+        required: f64,
+    },
+    /// Cross-validated NRMSE rises too much on some axis.
+    Loss {
+        /// Largest relative loss.
+        loss: f64,
+    },
+}
+
+impl std::fmt::Display for Rejection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotEstimable(m) => write!(f, "cannot be estimated: {m}"),
+            Self::NotSignificant { p, level } => {
+                write!(f, "not significant (P = {p:.2e} >= {level:.2e})")
+            }
+            Self::Implausible {
+                parameter,
+                value,
+                unit,
+            } => write!(f, "implausible {parameter} = {value:.4e} {unit}"),
+            Self::SmallGain { gain, required } => write!(
+                f,
+                "validation gain {:.1} % below {:.1} %",
+                100.0 * gain,
+                100.0 * required
+            ),
+            Self::SmallNetGain { gain, required } => write!(
+                f,
+                "net validation gain over all axes {:.1} % below {:.1} %",
+                100.0 * gain,
+                100.0 * required
+            ),
+            Self::Loss { loss } => {
+                write!(f, "validation worse by {:.1} % on an axis", 100.0 * loss)
+            }
+        }
+    }
 }
 
 /// One step of the procedure.
@@ -175,6 +248,10 @@ pub struct Diagnosis {
     /// Structure of the final model.
     #[serde(skip)]
     pub structure: ModelStructure,
+    /// The final model's estimation on all fit data (FSOA tables, MMR estimates with
+    /// white-residual σ and covariance, fit metrics).
+    #[serde(skip)]
+    pub fit: Fit,
 }
 
 /// Why the procedure could not run.
@@ -182,7 +259,11 @@ pub struct Diagnosis {
 pub enum DiagnoseError {
     /// The base model itself could not be fitted from the statistics.
     #[error("diagnosis: {0}")]
-    Fit(String),
+    Fit(#[from] EstimateError),
+    /// The data do not fit the model or its candidate effects (rotor count, missing
+    /// signals, non-finite regressors).
+    #[error("diagnosis: {0}")]
+    Data(#[from] AccumulateError),
 }
 
 /// Statistics of the base structure extended by every candidate.
@@ -232,21 +313,17 @@ impl CandidateStatistics<'_> {
     }
 }
 
-/// Fit of a sub-model of `stats.extended`: θ, σ and P over its params, its
-/// cross-validation, and the structure.
+/// Fit of a sub-model of `stats.extended`: the estimates, σ and P with the coloured-
+/// residual correction, its cross-validation, and the structure.
 #[derive(Clone)]
 struct Trial {
-    theta: Vec<f64>,
+    fit: Fit,
     std: Vec<f64>,
     p: Vec<f64>,
     cv: CrossValidation,
     structure: ModelStructure,
     /// Column indices into `stats.extended`.
     columns: Vec<usize>,
-    /// Parameters estimated (indices into `structure.params`) and their covariance,
-    /// row-major in that order (white residuals).
-    estimated: Vec<usize>,
-    covariance: Vec<f64>,
 }
 
 /// Fits the sub-model of `stats.extended` with columns `columns` (indices into
@@ -256,13 +333,11 @@ fn trial(
     columns: &[usize],
     options: &FitOptions,
     inflation: f64,
-) -> Result<Trial, String> {
+) -> Result<Trial, EstimateError> {
     let structure = stats.extended.select_columns(columns);
     let columns = columns.to_vec();
-    let fit = estimate::fit(&structure, &stats.fit.select(&columns), options)
-        .map_err(|e| e.to_string())?;
-    let cv = estimate::cross_validate(&structure, &stats.folds.select(&columns), options)
-        .map_err(|e| e.to_string())?;
+    let fit = estimate::fit(&structure, &stats.fit.select(&columns), options)?;
+    let cv = estimate::cross_validate(&structure, &stats.folds.select(&columns), options)?;
     let mut std = vec![0.0; structure.params.len()];
     let mut p = vec![1.0; structure.params.len()];
     let inflation = inflation.max(1.0).sqrt();
@@ -271,14 +346,12 @@ fn trial(
         p[i] = crate::estimate::inference::t_test(est.estimate / std[i], fit.mmr.dof).0;
     }
     Ok(Trial {
-        theta: fit.mmr.theta.clone(),
+        fit,
         std,
         p,
         cv,
         structure,
         columns,
-        estimated: fit.mmr.param_index.clone(),
-        covariance: fit.mmr.covariance.clone(),
     })
 }
 
@@ -291,15 +364,16 @@ fn trial(
 fn joint_p(t: &Trial, own: &[usize], inflation: f64) -> f64 {
     let at: Vec<usize> = own
         .iter()
-        .filter_map(|p| t.estimated.iter().position(|e| e == p))
+        .filter_map(|p| t.fit.mmr.param_index.iter().position(|e| e == p))
         .collect();
     let k = at.len();
-    let n = t.estimated.len();
-    let theta: Vec<f64> = at.iter().map(|&i| t.theta[t.estimated[i]]).collect();
+    let mmr = &t.fit.mmr;
+    let n = mmr.param_index.len();
+    let theta: Vec<f64> = at.iter().map(|&i| mmr.theta[mmr.param_index[i]]).collect();
     let cov: Vec<f64> = at
         .iter()
         .flat_map(|&i| at.iter().map(move |&j| (i, j)))
-        .map(|(i, j)| t.covariance[i * n + j] * inflation.max(1.0))
+        .map(|(i, j)| mmr.covariance[i * n + j] * inflation.max(1.0))
         .collect();
     let (Some(w), Ok(chi2)) = (
         quadratic_form_inverse(&cov, &theta),
@@ -362,7 +436,7 @@ pub fn diagnose(
 ) -> Result<Diagnosis, DiagnoseError> {
     let inflation = options.variance_inflation;
     let mut kept: Vec<usize> = stats.columns_of(|p| p < stats.base_params);
-    let base = trial(stats, &kept, fit_options, inflation).map_err(DiagnoseError::Fit)?;
+    let base = trial(stats, &kept, fit_options, inflation)?;
     let mut current = base.clone();
     let mut added: Vec<usize> = Vec::new();
     let mut steps = Vec::new();
@@ -387,8 +461,7 @@ pub fn diagnose(
         .report
         .map(|r| -> Result<_, DiagnoseError> {
             let on_report = |t: &Trial| {
-                estimate::evaluate(&t.structure, &t.theta, &r.select(&t.columns))
-                    .map_err(|e| DiagnoseError::Fit(e.to_string()))
+                estimate::evaluate(&t.structure, &t.fit.mmr.theta, &r.select(&t.columns))
             };
             Ok([on_report(&base)?, on_report(&current)?])
         })
@@ -405,9 +478,10 @@ pub fn diagnose(
         before_folds: fold_metrics(&base.cv),
         after_folds: fold_metrics(&current.cv),
         validation,
-        theta: current.theta,
+        theta: current.fit.mmr.theta.clone(),
         std: current.std,
         structure: current.structure,
+        fit: current.fit,
     })
 }
 
@@ -449,7 +523,7 @@ fn forward_step(
     let look_alike = options.look_alike;
     scored.sort_by(|a, b| {
         let key = |s: &CandidateScore| {
-            let ok = s.rejected.is_empty();
+            let ok = s.rejected.is_none();
             (ok, ok && s.kind.is_model_completion())
         };
         key(&a.0)
@@ -459,7 +533,7 @@ fn forward_step(
     });
     let best_ok = scored
         .first()
-        .filter(|s| s.0.rejected.is_empty())
+        .filter(|s| s.0.rejected.is_none())
         .map(|s| s.0.clone());
     let look_alikes = best_ok
         .as_ref()
@@ -467,7 +541,7 @@ fn forward_step(
             scored[1..]
                 .iter()
                 .filter(|s| {
-                    s.0.rejected.is_empty()
+                    s.0.rejected.is_none()
                         && s.0.kind != best.kind
                         && s.0.kind.is_model_completion() == best.kind.is_model_completion()
                         && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
@@ -479,7 +553,7 @@ fn forward_step(
     let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
     let mut winner = None;
     for (i, (s, c, t)) in scored.into_iter().enumerate() {
-        if i == 0 && s.rejected.is_empty() {
+        if i == 0 && s.rejected.is_none() {
             winner = t.map(|t| (c, t));
         }
         ranking.push(s);
@@ -603,12 +677,12 @@ fn score(
         validation_gain: [0.0; 6],
         total_gain: 0.0,
         p: 1.0,
-        rejected: String::new(),
+        rejected: None,
     };
     let t = match trial(stats, &columns, fit_options, options.variance_inflation) {
         Ok(t) => t,
         Err(e) => {
-            s.rejected = format!("cannot be estimated: {e}");
+            s.rejected = Some(Rejection::NotEstimable(e.to_string()));
             return (s, c, None);
         }
     };
@@ -625,7 +699,7 @@ fn score(
         .iter()
         .map(|&i| EffectParameter {
             name: t.structure.params[i].name.clone(),
-            estimate: t.theta[i],
+            estimate: t.fit.mmr.theta[i],
             std: t.std[i],
             unit: t.structure.params[i].unit.clone(),
             p: t.p[i],
@@ -643,29 +717,31 @@ fn score(
         .iter()
         .fold(f64::NEG_INFINITY, |m, &g| m.max(g));
     s.rejected = if s.p >= level {
-        format!("not significant (P = {:.2e} >= {level:.2e})", s.p)
+        Some(Rejection::NotSignificant { p: s.p, level })
     } else if let Some(p) = s
         .parameters
         .iter()
         .find(|p| !plausible(&p.name, p.estimate))
     {
-        format!("implausible {} = {:.4e} {}", p.name, p.estimate, p.unit)
+        Some(Rejection::Implausible {
+            parameter: p.name.clone(),
+            value: p.estimate,
+            unit: p.unit.clone(),
+        })
     } else if best_axis < options.min_gain {
-        format!(
-            "validation gain {:.1} % below {:.1} %",
-            100.0 * best_axis,
-            100.0 * options.min_gain
-        )
+        Some(Rejection::SmallGain {
+            gain: best_axis,
+            required: options.min_gain,
+        })
     } else if s.total_gain < options.min_gain {
-        format!(
-            "net validation gain over all axes {:.1} % below {:.1} %",
-            100.0 * s.total_gain,
-            100.0 * options.min_gain
-        )
+        Some(Rejection::SmallNetGain {
+            gain: s.total_gain,
+            required: options.min_gain,
+        })
     } else if worst < -options.max_loss {
-        format!("validation worse by {:.1} % on an axis", -100.0 * worst)
+        Some(Rejection::Loss { loss: -worst })
     } else {
-        String::new()
+        None
     };
     (s, c, Some(t))
 }
@@ -682,13 +758,12 @@ pub fn diagnose_chunks(
     fit_options: &FitOptions,
     options: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let err = |e: &dyn std::fmt::Display| DiagnoseError::Fit(e.to_string());
     let mut ws = crate::model::Workspace::default();
     let mut acc = Accumulator::new(base);
     for c in fit_data {
-        acc.push(base, c, &mut ws).map_err(|e| err(&e))?;
+        acc.push(base, c, &mut ws)?;
     }
-    let fit = estimate::fit(base, &acc, fit_options).map_err(|e| err(&e))?;
+    let fit = estimate::fit(base, &acc, fit_options)?;
     let first = fit_data.first();
     let ctx = super::CandidateContext {
         vehicle,
@@ -700,12 +775,13 @@ pub fn diagnose_chunks(
     };
     let mut thinned = super::Thinned::new(super::SCREENING_SAMPLES);
     fit_data.iter().for_each(|c| thinned.push(c));
-    let set = super::candidate_set(&ctx, Some(thinned.samples()), options).map_err(|e| err(&e))?;
+    let set = super::candidate_set(&ctx, Some(thinned.samples()), options)
+        .map_err(AccumulateError::from)?;
     let extended = set.extended;
     let (mut fa, mut va) = (Accumulator::new(&extended), Accumulator::new(&extended));
     for (acc, data) in [(&mut fa, fit_data), (&mut va, validation_data)] {
         for c in data {
-            acc.push(&extended, c, &mut ws).map_err(|e| err(&e))?;
+            acc.push(&extended, c, &mut ws)?;
         }
     }
     let folds = Folds::holdout("validation data", fa.clone(), va);

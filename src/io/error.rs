@@ -17,6 +17,8 @@ pub enum Location {
     Record(u64),
     /// A 0-based byte offset of a binary file (ULog: the start of a message).
     Offset(u64),
+    /// A 0-based sample index of a log held in memory ([`crate::source::MemoryLog`]).
+    Sample(u64),
 }
 
 /// An ingestion error: file, location, optional field, and what is wrong.
@@ -141,6 +143,7 @@ impl fmt::Display for IoError {
             Location::Line(n) => write!(f, ": line {n}")?,
             Location::Record(n) => write!(f, ": message {n}")?,
             Location::Offset(n) => write!(f, ": byte {n}")?,
+            Location::Sample(n) => write!(f, ": sample {n}")?,
         }
         if let Some(field) = &self.field {
             let sep = if self.location == Location::File {

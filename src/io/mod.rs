@@ -139,6 +139,19 @@ pub struct Summary {
     pub layout: Option<LayoutReport>,
 }
 
+impl Summary {
+    /// The summary of a log held in memory: `samples` samples, all kept, one segment.
+    pub fn of_memory(name: &str, samples: u64) -> Self {
+        Self {
+            file: name.to_string(),
+            rows_read: samples,
+            samples,
+            segments: usize::from(samples > 0),
+            ..Self::default()
+        }
+    }
+}
+
 /// The source of raw samples in slot layout (CSV rows, aligned MCAP messages).
 pub trait RowSource {
     /// File name for messages.
@@ -974,6 +987,7 @@ fn loc_text(loc: Location) -> String {
         Location::Line(n) => format!("line {n}"),
         Location::Record(n) => format!("message {n}"),
         Location::Offset(n) => format!("byte {n}"),
+        Location::Sample(n) => format!("sample {n}"),
     }
 }
 

@@ -184,7 +184,11 @@ impl From<&CandidateScore> for EffectRow {
                 .collect(),
             validation_gain: c.validation_gain.to_vec(),
             p: c.p,
-            rejected: c.rejected.clone(),
+            rejected: c
+                .rejected
+                .as_ref()
+                .map(|r| r.to_string())
+                .unwrap_or_default(),
         }
     }
 }
