@@ -266,7 +266,8 @@ impl IdentifiedModel {
         let Some(c) = &self.covariance else {
             return Ok(None);
         };
-        let mut chunk = SampleChunk::with_capacity(sample.omega.len(), 1, !sample.omega_dot.is_empty());
+        let mut chunk =
+            SampleChunk::with_capacity(sample.omega.len(), 1, !sample.omega_dot.is_empty());
         chunk.push(sample);
         let mut ws = Workspace::default();
         self.structure.assemble(&chunk, &mut ws)?;

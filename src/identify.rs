@@ -490,11 +490,21 @@ impl Results {
             for j in structure.axis_columns(axis) {
                 let c = &structure.columns[j];
                 let th = theta[c.param];
-                let sign = if th < 0.0 { "-" } else if first { "" } else { "+" };
+                let sign = if th < 0.0 {
+                    "-"
+                } else if first {
+                    ""
+                } else {
+                    "+"
+                };
+                let label = if c.label.contains([' ', '+', '-']) {
+                    format!("({})", c.label)
+                } else {
+                    c.label.clone()
+                };
                 line.push_str(&format!(
-                    " {sign} {:.5e}*{} [{}]",
+                    " {sign} {:.5e}*{label} [{}]",
                     th.abs(),
-                    c.label,
                     structure.params[c.param].name
                 ));
                 first = false;

@@ -48,14 +48,20 @@ fn round_trip_preserves_predictions_exactly() {
     m.save(&path).unwrap();
     let back = IdentifiedModel::load(&path).unwrap();
     assert_eq!(back.parameters, m.parameters);
-    let s = state([5.0, -1.0, 0.5], [0.3, -0.2, 0.1], &[900.0, 950.0, 1000.0, 1050.0]);
+    let s = state(
+        [5.0, -1.0, 0.5],
+        [0.3, -0.2, 0.1],
+        &[900.0, 950.0, 1000.0, 1050.0],
+    );
     let a = m.predict(&s).unwrap();
     let b = back.predict(&s).unwrap();
     // TOML stores f64 with round-trip precision, so predictions are bit-identical.
     assert_eq!(a, b);
     // Equal rotor speeds at rest give upward thrust (F_z < 0) and zero moments; at
     // 2000 rad/s (λ = ν0/ΩR ≈ 0.077) these blade constants lift.
-    let y = back.predict(&state([0.0; 3], [0.0; 3], &[2000.0; 4])).unwrap();
+    let y = back
+        .predict(&state([0.0; 3], [0.0; 3], &[2000.0; 4]))
+        .unwrap();
     assert!(y[2] < -1.0, "{y:?}");
     assert!(y[3..].iter().all(|x| x.abs() < 1e-9), "{y:?}");
 }
@@ -85,7 +91,11 @@ fn covariance_round_trips_and_gives_prediction_sigma() {
     m.save(&path).unwrap();
     let back = IdentifiedModel::load(&path).unwrap();
     assert_eq!(back.covariance, m.covariance, "TOML keeps f64 exactly");
-    let s = state([4.0, 1.0, -0.5], [0.2, -0.1, 0.3], &[900.0, 1000.0, 1100.0, 950.0]);
+    let s = state(
+        [4.0, 1.0, -0.5],
+        [0.2, -0.1, 0.3],
+        &[900.0, 1000.0, 1100.0, 950.0],
+    );
     let std = back.prediction_std(&s).unwrap().expect("a covariance");
     let mut chunk = SampleChunk::with_capacity(4, 1, true);
     chunk.push(&s);
@@ -95,9 +105,18 @@ fn covariance_round_trips_and_gives_prediction_sigma() {
     for j in m.structure.axis_columns(Axis::Fz) {
         x[m.structure.columns[j].param] += ws.column(j)[0];
     }
-    let expect = x.iter().zip(&sigma).map(|(x, s)| (x * s).powi(2)).sum::<f64>().sqrt();
+    let expect = x
+        .iter()
+        .zip(&sigma)
+        .map(|(x, s)| (x * s).powi(2))
+        .sum::<f64>()
+        .sqrt();
     assert!(expect > 0.0);
-    assert!((std[2] - expect).abs() <= 1e-12 * expect, "{} vs {expect}", std[2]);
+    assert!(
+        (std[2] - expect).abs() <= 1e-12 * expect,
+        "{} vs {expect}",
+        std[2]
+    );
     // Without a covariance there is no interval.
     assert_eq!(model().prediction_std(&s).unwrap(), None);
     let _ = std::fs::remove_file(&path);

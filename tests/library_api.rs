@@ -1,0 +1,335 @@
+//! The library's public entry points on malformed input: every one returns a typed error
+//! naming what is wrong (and the binary's exit code follows from the variant); none
+//! panics. Plus the fit builder on samples in memory: validation logs, a bad sample
+//! reported by `run`, and the results object's statistics checked against their
+//! definitions.
+
+use std::path::{Path, PathBuf};
+
+use mrsysid::error::RequestError;
+use mrsysid::estimate::{self, FitOptions};
+use mrsysid::identified::IdentifiedModel;
+use mrsysid::io::error::Location;
+use mrsysid::io::{Mapping, ReadOptions};
+use mrsysid::model::{ModelError, ModelOptions, ModelStructure, Workspace};
+use mrsysid::pipeline::Holdout;
+use mrsysid::stats::{AccumulateError, Accumulator};
+use mrsysid::vehicle::VehicleSource;
+use mrsysid::{Error, Identification, MemoryLog, Sample, SampleChunk, Vehicle};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn quad() -> Vehicle {
+    Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle")
+}
+
+/// `n` samples of the shipped flight (which carries Ω̇, height and attitude).
+fn flight(n: usize) -> Vec<Sample> {
+    let log = mrsysid::io::open_log(
+        &root().join("data/quad_x_flight_quadratic_drag.csv"),
+        &quad(),
+        None,
+        &ReadOptions::default(),
+    )
+    .expect("shipped flight");
+    let mut out = Vec::new();
+    for chunk in log {
+        let chunk = chunk.expect("valid rows");
+        out.extend((0..chunk.len()).map(|k| chunk.sample(k)));
+    }
+    out.truncate(n);
+    out
+}
+
+/// Makes a sample malformed.
+type Spoil = fn(&mut Sample);
+
+#[test]
+fn malformed_samples_are_refused_by_name_and_index() {
+    let good = flight(600);
+    // 3 of 4 rotor speeds in sample 17 (once a panic in the mixing).
+    let mut bad = good.clone();
+    bad[17].omega.pop();
+    let e = Identification::new(quad())
+        .samples("mine", bad)
+        .run()
+        .unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    let Error::Input(io) = &e else {
+        panic!("{e:?}")
+    };
+    assert_eq!(io.location, Location::Sample(17));
+    assert!(
+        e.to_string()
+            .starts_with("mine: sample 17, signal \"omega\""),
+        "{e}"
+    );
+    // NaN, time going back, a missing optional signal, a negative rotor speed.
+    let cases: [(usize, Spoil, &str); 4] = [
+        (
+            3,
+            |s| s.wrench[4] = f64::NAN,
+            "signal \"my\": not a finite number",
+        ),
+        (250, |s| s.t = 0.0, "goes backwards"),
+        (9, |s| s.height = None, "signal \"height\": absent here"),
+        (40, |s| s.omega[2] = -1.0, "signal \"omega3\": value -1"),
+    ];
+    for (k, spoil, expect) in cases {
+        let mut bad = good.clone();
+        spoil(&mut bad[k]);
+        let e = MemoryLog::from_samples("mine", bad).unwrap_err();
+        assert_eq!(e.location, Location::Sample(k as u64), "{e}");
+        assert!(e.to_string().contains(expect), "{e}");
+    }
+    // Another rotor count than the vehicle's: the model says so.
+    let hexa: Vec<Sample> = good
+        .iter()
+        .map(|s| Sample {
+            omega: vec![s.omega[0]; 6],
+            omega_dot: vec![0.0; 6],
+            ..s.clone()
+        })
+        .collect();
+    let e = Identification::new(quad())
+        .samples("hexa", hexa)
+        .run()
+        .unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            Error::Accumulate {
+                log,
+                source: AccumulateError::Model(ModelError::RotorCountMismatch { expected: 4, found: 6 })
+            } if log == "hexa"
+        ),
+        "{e:?}"
+    );
+    assert_eq!(e.exit_code(), 2);
+}
+
+#[test]
+fn malformed_chunks_are_refused_everywhere_they_enter() {
+    let vehicle = quad();
+    let structure = ModelStructure::eq22(&vehicle, ModelOptions::default());
+    let mut chunk = SampleChunk::with_capacity(4, 8, true);
+    for s in flight(8) {
+        chunk.push(&s);
+    }
+    // A chunk whose yaw-moment series is one short, and one pushed a 3-rotor sample.
+    let mut short = chunk.clone();
+    short.wrench[5].pop();
+    let mut ragged = chunk.clone();
+    ragged.push(&Sample {
+        omega: vec![1.0; 3],
+        ..Sample::default()
+    });
+    for bad in [&short, &ragged] {
+        let mut ws = Workspace::default();
+        let e = structure.assemble(bad, &mut ws).unwrap_err();
+        assert!(matches!(e, ModelError::ChunkShape { .. }), "{e:?}");
+        let mut acc = Accumulator::new(&structure);
+        assert!(acc.push(&structure, bad, &mut ws).is_err());
+        assert!(MemoryLog::from_chunks("chunks", [bad.clone()]).is_err());
+        let theta = vec![0.0; structure.params.len()];
+        assert!(structure.predict_chunk(&theta, bad, &mut ws).is_err());
+    }
+    // θ of the wrong length.
+    let e = structure
+        .predict_chunk(&[1.0; 3], &chunk, &mut Workspace::default())
+        .unwrap_err();
+    assert_eq!(
+        e,
+        ModelError::ParameterCount {
+            expected: structure.params.len(),
+            found: 3
+        }
+    );
+    // A saved model asked about a state with 3 rotor speeds.
+    let model = IdentifiedModel::new(
+        vehicle.clone(),
+        structure.clone(),
+        &vec![0.0; structure.params.len()],
+        &vec![0.0; structure.params.len()],
+    );
+    let three = Sample {
+        omega: vec![500.0; 3],
+        omega_dot: vec![0.0; 3],
+        ..Sample::default()
+    };
+    assert!(model.predict(&three).is_err());
+    assert!(model.prediction_std(&three).is_ok_and(|s| s.is_none()));
+    // State without the rotor accelerations the J_z terms need.
+    let no_dot = Sample {
+        omega: vec![500.0; 4],
+        ..Sample::default()
+    };
+    assert_eq!(
+        model.predict(&no_dot).unwrap_err(),
+        ModelError::MissingRotorAcceleration
+    );
+}
+
+#[test]
+fn requests_that_cannot_be_carried_out_are_refused_before_reading() {
+    let e = Identification::new(quad()).run().unwrap_err();
+    assert!(matches!(e, Error::Request(RequestError::NoLogs)), "{e:?}");
+    let holdout = Holdout {
+        segment_seconds: f64::NAN,
+        every: 5,
+    };
+    let e = Identification::new(quad())
+        .samples("a", flight(300))
+        .holdout(holdout)
+        .run()
+        .unwrap_err();
+    assert!(
+        matches!(e, Error::Request(RequestError::InvalidHoldout { .. })),
+        "{e:?}"
+    );
+    let hexa = Vehicle::from_toml_file(&root().join("data/vehicles/hexa_x.toml")).unwrap();
+    let e = Identification::new(quad())
+        .structure(ModelStructure::eq22(&hexa, ModelOptions::default()))
+        .samples("a", flight(300))
+        .run()
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::Request(RequestError::StructureMismatch {
+                structure: 6,
+                vehicle: 4
+            })
+        ),
+        "{e:?}"
+    );
+    // One log of 3 s: shorter than one hold-out cycle (5 segments of 2 s).
+    let e = Identification::new(quad())
+        .samples("short", flight(300))
+        .run()
+        .unwrap_err();
+    assert!(
+        matches!(e, Error::Request(RequestError::HoldoutTooShort { .. })),
+        "{e:?}"
+    );
+    // A missing file, named.
+    let e = Identification::new(quad())
+        .log(Path::new("/nonexistent/flight.csv"))
+        .run()
+        .unwrap_err();
+    assert!(e.to_string().starts_with("flight.csv"), "{e}");
+    assert_eq!(e.exit_code(), 2);
+}
+
+#[test]
+fn data_that_cannot_support_a_fit_fail_with_exit_code_1() {
+    // One repeated state: no excitation (once a 0/0 t-value inside statrs).
+    let one = flight(1)[0].clone();
+    let same: Vec<Sample> = (0..1200)
+        .map(|k| Sample {
+            t: k as f64 * 0.01,
+            ..one.clone()
+        })
+        .collect();
+    let e = Identification::new(quad())
+        .samples("hover", same.clone())
+        .diagnose(false)
+        .run()
+        .unwrap_err();
+    assert!(matches!(e, Error::Estimate(_)), "{e:?}");
+    assert_eq!(e.exit_code(), 1);
+    // The estimator on its own, on the same statistics.
+    let structure = ModelStructure::eq22(&quad(), ModelOptions::default());
+    let mut acc = Accumulator::new(&structure);
+    let log = MemoryLog::from_samples("hover", same).unwrap();
+    for c in log.chunks() {
+        acc.push(&structure, c, &mut Workspace::default()).unwrap();
+    }
+    assert!(estimate::fit(&structure, &acc, &FitOptions::default()).is_err());
+}
+
+#[test]
+fn text_inputs_are_refused_with_their_name() {
+    let e = Vehicle::from_toml_str("mass = [", VehicleSource::Code).unwrap_err();
+    assert!(!e.to_string().is_empty());
+    let e = Mapping::from_toml_str("[signals\nrates =", "m.toml").unwrap_err();
+    assert!(e.to_string().starts_with("m.toml"), "{e}");
+    let path = std::env::temp_dir().join(format!("mrsysid-api-{}.toml", std::process::id()));
+    std::fs::write(&path, "schema_version = 1\nparameters = 3\n").unwrap();
+    let e = IdentifiedModel::load(&path).unwrap_err();
+    assert!(e.to_string().contains("not a model file"), "{e}");
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn results_from_memory_match_their_definitions() {
+    // 30 s flight: the first 24 s fit (2 s segments, every 5th held out), the last 6 s
+    // only reported on.
+    let all = flight(3000);
+    let results = Identification::new(quad())
+        .samples("fit", all[..2400].to_vec())
+        .validate_samples("report", all[2400..].to_vec())
+        .diagnose(false)
+        .threads(2)
+        .run()
+        .expect("fit");
+    let o = results.outcome();
+    assert_eq!(o.validation_samples, 600);
+    assert_eq!(o.summaries[0].file, "fit");
+    let params = results.parameters();
+    let cov = results.covariance();
+    let kappa = results.variance_inflation();
+    assert!(kappa >= 1.0);
+    for p in &params {
+        let i = results
+            .structure()
+            .param_index(&p.name)
+            .expect("a parameter of the structure");
+        // σ² is the covariance's diagonal; the white σ is κ^-½ of it; t = θ̂/σ; the
+        // 95 % interval is symmetric about θ̂ (relative rounding 1e-12).
+        assert!(
+            (cov[(i, i)].sqrt() - p.std).abs() <= 1e-12 * p.std,
+            "{}",
+            p.name
+        );
+        assert!((p.std_white * kappa.sqrt() - p.std).abs() <= 1e-12 * p.std);
+        assert!((p.t - p.estimate / p.std).abs() <= 1e-12 * p.t.abs());
+        let mid = 0.5 * (p.ci95[0] + p.ci95[1]);
+        assert!((mid - p.estimate).abs() <= 1e-9 * p.estimate.abs().max(p.std));
+        assert!((0.0..=1.0).contains(&p.p_value));
+    }
+    // Residuals are measured − fitted, and fitted values reproduce the fit metrics'
+    // RMSE on the fit data (the same model, the same samples).
+    let log = MemoryLog::from_samples("x", all[..20].to_vec()).unwrap();
+    let fitted = results.fitted(&log.chunks()[0]).unwrap();
+    let residuals = results.residuals(&log.chunks()[0]).unwrap();
+    for a in 0..6 {
+        for k in 0..20 {
+            let z = log.chunks()[0].wrench[a][k];
+            assert!((fitted[a][k] + residuals[a][k] - z).abs() <= 1e-9 * z.abs().max(1.0));
+        }
+    }
+    // AIC/BIC by their definitions from the fit metrics.
+    let n = results.estimation().samples as f64;
+    for (ic, m) in results
+        .information_criteria()
+        .iter()
+        .zip(results.fit_metrics())
+    {
+        let base = n * (m.rmse * m.rmse).ln();
+        assert!((ic.aic - base - 2.0 * ic.parameters as f64).abs() < 1e-6 * base.abs());
+        assert!(ic.bic > ic.aic, "ln N > 2 for N > 7");
+    }
+    // The saved model predicts what the results fitted.
+    let model = results.to_identified_model();
+    let y = model.predict(&all[5]).unwrap();
+    let one = MemoryLog::from_samples("one", [all[5].clone()]).unwrap();
+    let f = results.fitted(&one.chunks()[0]).unwrap();
+    for a in 0..6 {
+        assert!((y[a] - f[a][0]).abs() <= 1e-12 * f[a][0].abs().max(1e-9));
+    }
+    assert!(results.equations().lines().count() == 6);
+    assert!(results.summary().contains("Final model"));
+}
