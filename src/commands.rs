@@ -81,6 +81,9 @@ fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
 pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
     let vehicle =
         Vehicle::from_toml_file(&cmd.vehicle).map_err(|e| Failure::input(e.to_string()))?;
+    for note in vehicle.notes() {
+        eprintln!("note: {}: {note}", cmd.vehicle.display());
+    }
     if !(cmd.holdout_segment.is_finite() && cmd.holdout_segment > 0.0) {
         return Err(Failure::input(format!(
             "--holdout-segment {} must be a positive number of seconds",
