@@ -558,6 +558,8 @@ impl Vehicle {
         for r in &mut v.rotors {
             r.spin = -r.spin;
         }
+        // The breach details name spins: describe the reversed ones.
+        v.breaches = assumption2_breaches(&v.rotors, v.arm_length, v.tolerance);
         v
     }
 }
@@ -937,6 +939,20 @@ mod tests {
         let text = toml::to_string(&v.definition()).unwrap();
         let back = Vehicle::from_toml_str(&text, VehicleSource::Code).unwrap();
         assert_eq!(back, v);
+    }
+
+    #[test]
+    fn reversed_spins_describe_the_reversed_vehicle() {
+        // A hexa with neighbours 1–2 spinning alike: a general planar layout.
+        let mut rotors = Preset::HexaX.rotors(0.3, 1.0);
+        rotors[1].spin = 1.0;
+        rotors[2].spin = -1.0;
+        let v = Vehicle::from_rotors("t", props(), rotors).unwrap();
+        let detail = |v: &Vehicle| v.assumption2_breaches()[0].detail.clone();
+        assert_eq!(v.class(), ConfigurationClass::GeneralPlanar);
+        assert!(detail(&v).ends_with("both have spin +1"), "{}", detail(&v));
+        let r = v.with_spins_reversed();
+        assert!(detail(&r).ends_with("both have spin -1"), "{}", detail(&r));
     }
 
     #[test]
