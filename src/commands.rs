@@ -80,6 +80,11 @@ fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
 /// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
 pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
     let vehicle = Vehicle::from_toml_file(&cmd.vehicle).map_err(mrsysid::Error::from)?;
+    if !cmd.quiet {
+        for note in vehicle.notes() {
+            eprintln!("note: {}: {note}", cmd.vehicle.display());
+        }
+    }
     if let Some(dir) = &cmd.plots {
         std::fs::create_dir_all(dir).map_err(|e| {
             Failure::input(format!(

@@ -4,6 +4,14 @@
 //! `[1/N …]` (thrust δt), `[−y_i …]` (aileron δa), `[x_i …]` (elevator δe) and
 //! `[−σ_i …]` (rudder δr). The same matrix maps rotor accelerations Ω̇ to δ̇, which the
 //! J_z δ̇r term of Eq. 22f needs.
+//!
+//! General planar layouts (breaking Assumption 2) use the same rows with the actual hub
+//! positions, so every δ term of Eq. 22 stays exact; what changes is that the rows are no
+//! longer orthogonal: with the rotor centroid off the CG, equal rotor speeds give
+//! δe = Ω Σx_i and δa = −Ω Σy_i (thrust couples into pitch and roll); Σx_i y_i ≠ 0
+//! couples δa and δe, Σσ_i x_i, Σσ_i y_i ≠ 0 couple δr into them. The vehicle loader
+//! requires rank 4 (thrust, roll, pitch and yaw independently commandable) and balanced
+//! spins (Σσ_i = 0, so δr = 0 at equal speeds).
 
 use crate::vehicle::Vehicle;
 
@@ -176,5 +184,39 @@ mod tests {
         for (k, row) in out.iter().enumerate() {
             assert!((row[0] - d2[k]).abs() < 1e-6 && (row[1] - 4.0 * d2[k]).abs() < 1e-6);
         }
+    }
+
+    #[test]
+    fn asymmetric_x_couples_thrust_into_pitch() {
+        // Arms of 0.29 m (front) and 0.24 m (rear) at ±45°: Σx_i = √2 (0.29 − 0.24) m,
+        // Σy_i = 0, Σσ_i = 0.
+        let c = std::f64::consts::FRAC_1_SQRT_2;
+        let rotors = [(0.29, 0.29, 1.0), (-0.24, 0.24, -1.0), (-0.24, -0.24, 1.0)]
+            .into_iter()
+            .chain([(0.29, -0.29, -1.0)])
+            .map(|(x, y, spin)| crate::vehicle::Rotor {
+                x: x * c,
+                y: y * c,
+                spin,
+            })
+            .collect();
+        let props = MassAndRotorProperties {
+            mass: 1.0,
+            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
+            air_density: 1.225,
+            rotor_radius: 0.1,
+            hub_height: 0.0,
+            rotor_inertia: 0.0,
+        };
+        let v = Vehicle::from_rotors("asym", props, rotors).unwrap();
+        let m = Mixing::new(&v);
+        // Equal speeds: δt = Ω, δa = 0, δe = Ω Σx_i, δr = 0 (to rounding).
+        let d = m.actuators(&[500.0; 4]);
+        let sx = 2f64.sqrt() * 0.05;
+        assert!((d[0] - 500.0).abs() < 1e-12, "{d:?}");
+        assert!(d[1].abs() < 1e-12 && d[3].abs() < 1e-12, "{d:?}");
+        assert!((d[2] - 500.0 * sx).abs() < 1e-12, "{d:?}");
+        // The rows keep the actual positions (Eq. 20): rotor 2's aileron weight is −y_2.
+        assert_eq!(m.row(VirtualActuator::Aileron)[1], -0.24 * c);
     }
 }

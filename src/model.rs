@@ -24,6 +24,35 @@
 //! and the M_z term of C_H_mub_muw is v(pΣx_iy_i − qΣx_i²) − u(pΣy_i² − qΣx_iy_i),
 //! which equals the printed −½Nℓ²(up + vq) under Assumption 2.
 //!
+//! # General planar layouts
+//!
+//! Nothing above needs Assumption 2 beyond an even rotor count, balanced spins
+//! (Σσ_i = 0) and coplanar, uncanted rotors: the virtual actuators use the actual hub
+//! positions (M_ix rows 1/N, −y_i, x_i, −σ_i, Eq. 20) and the inflow corrections are the
+//! per-rotor sums above. What Assumption 2's symmetry adds is that the first moments of
+//! the layout vanish: Σx_i = Σy_i = 0 (rotor centroid at the CG) and Σσ_i x_i =
+//! Σσ_i y_i = 0 (spins balanced on each side). For a layout that breaks Assumption 2
+//! ([`ConfigurationClass::GeneralPlanar`]) these sums are kept and bring the terms that
+//! symmetry cancels, all with the seed's lumped parameters except one:
+//!
+//! - F_x, F_y: Σ w_i = N w + p Σy_i − q Σx_i in the C_H_mub_muw column (and in the
+//!   hub-force lever terms h F_y, −h F_x of M_x, M_y);
+//! - M_x, M_y: the thrust's state-only part acts at the rotor centroid,
+//!   −C_T_mu2 Σy_i V_h² (M_x) and +C_T_mu2 Σx_i V_h² (M_y); the hub rolling/pitching
+//!   moments' inflow part adds ½ R {u, v} Σσ_i w_i to the C_T_muw column;
+//! - M_z: (C_H_mub_mu0 ν0 + C_H_mub_mu V_h − C_H_mub_muw w)(u Σy_i − v Σx_i) from the
+//!   H and S forces' lever arms; 2 w Σσ_i w_i in the C_Q_muw2 column; and
+//!   −R (2 C_T_muw ν0 + C_Q_mu_muw V_h) Σσ_i w_i from the square of the inflow in the rotor
+//!   torque, with Σσ_i w_i = p Σσ_i y_i − q Σσ_i x_i.
+//!
+//! `C_Q_mu_muw` = C_σ C_νμ (1 − C_νw) is the μ μ_w coefficient of Eq. 8f, which cancels
+//! under Assumption 2: it is the product of the two inflow slopes, not a combination of
+//! the other 15, so it is a parameter of its own (present only with the terms linear in
+//! V_h). Only the printed case table of Eq. 22 (the ℓ² forms of the Δν terms, per
+//! Definition 1) stops being exact; a general planar layout always uses the derived sums,
+//! even with [`InflowCorrection::Paper`]. A vehicle that satisfies Assumption 2 within its
+//! geometry tolerance keeps the seed's structure (first moments taken as zero).
+//!
 //! [`InflowCorrection::Paper`] reproduces the printed case table of Eq. 22 instead.
 //! By the sums above, the printed table is not consistent with any single spin
 //! assignment: for quadrotor× the printed Δν_ℒ, Δν_ℳ and Δν_𝒩² hold when rotor 1 at
@@ -182,10 +211,11 @@ pub struct Parameter {
 #[serde(rename_all = "snake_case")]
 pub enum InflowCorrection {
     /// From per-rotor sums over the vehicle's positions and spins (exact for any
-    /// Assumption 2 layout and spin assignment).
+    /// supported planar layout and spin assignment, Assumption 2 or not).
     #[default]
     Derived,
-    /// The printed case table of Eq. 22, to reproduce the seed.
+    /// The printed case table of Eq. 22, to reproduce the seed (Definition 1 classes
+    /// only: a general planar layout uses [`InflowCorrection::Derived`]).
     Paper,
 }
 
@@ -367,15 +397,21 @@ impl ModelStructure {
             h: props.hub_height,
             tiny: 1e-12 * n * l2,
         };
-        let geometry = Geometry::of(vehicle, c.tiny);
+        let geometry = Geometry::of(vehicle, c.tiny, 1e-12 * n * vehicle.arm_length());
         let mut b = Builder {
             params: Vec::new(),
             columns: Vec::new(),
         };
-        in_plane_forces(&mut b, &c, options);
-        vertical_force(&mut b, &c, options);
-        roll_pitch_moments(&mut b, &c, options, vehicle.class());
-        yaw_moment(&mut b, &c, options, vehicle.class(), &geometry);
+        // The printed case table exists only for Definition 1's classes; a general
+        // planar layout always uses the per-rotor sums.
+        let mut o = options;
+        if vehicle.class() == ConfigurationClass::GeneralPlanar {
+            o.inflow = InflowCorrection::Derived;
+        }
+        in_plane_forces(&mut b, &c, o, &geometry);
+        vertical_force(&mut b, &c, o);
+        roll_pitch_moments(&mut b, &c, o, vehicle.class(), &geometry);
+        yaw_moment(&mut b, &c, o, vehicle.class(), &geometry);
         let known = rotor_inertia_terms(&mut b, options, props.rotor_inertia);
         b.columns.sort_by_key(|col| col.axis);
         // Parameters in order of first appearance by axis, as in Table 5.
@@ -797,7 +833,8 @@ impl ModelStructure {
     }
 }
 
-/// Geometric sums of the rotor layout, m².
+/// Geometric sums of the rotor layout: second moments (m²) and the first moments of a
+/// general planar layout (m), which Assumption 2's symmetry makes zero.
 struct Geometry {
     sxx: f64,
     syy: f64,
@@ -805,28 +842,50 @@ struct Geometry {
     s_sigma_xx: f64,
     s_sigma_yy: f64,
     s_sigma_xy: f64,
+    /// Σ x_i, Σ y_i: N times the rotor centroid's offset from the CG, m.
+    sx: f64,
+    sy: f64,
+    /// Σ σ_i x_i, Σ σ_i y_i: the spin-weighted first moments, m.
+    s_sigma_x: f64,
+    s_sigma_y: f64,
 }
 
 impl Geometry {
-    fn of(vehicle: &Vehicle, tiny: f64) -> Self {
-        let sum = |f: &dyn Fn(&crate::vehicle::Rotor) -> f64| {
+    /// Sums of `vehicle`'s layout; second moments below `tiny` (m²) are rounding noise.
+    /// The first moments are zero for a layout that satisfies Assumption 2 (within its
+    /// tolerance, so an Assumption 2 vehicle keeps the seed's structure) and are taken
+    /// exactly otherwise (rounding noise below `tiny_length`, m, dropped).
+    fn of(vehicle: &Vehicle, tiny: f64, tiny_length: f64) -> Self {
+        let sum = |f: &dyn Fn(&crate::vehicle::Rotor) -> f64, tiny: f64| {
             let s: f64 = vehicle.rotors().iter().map(f).sum();
             if s.abs() <= tiny { 0.0 } else { s }
         };
+        let first = |f: &dyn Fn(&crate::vehicle::Rotor) -> f64| {
+            if vehicle.satisfies_assumption2() {
+                0.0
+            } else {
+                sum(f, tiny_length)
+            }
+        };
         Self {
-            sxx: sum(&|r| r.x * r.x),
-            syy: sum(&|r| r.y * r.y),
-            sxy: sum(&|r| r.x * r.y),
-            s_sigma_xx: sum(&|r| r.spin * r.x * r.x),
-            s_sigma_yy: sum(&|r| r.spin * r.y * r.y),
-            s_sigma_xy: sum(&|r| r.spin * r.x * r.y),
+            sxx: sum(&|r| r.x * r.x, tiny),
+            syy: sum(&|r| r.y * r.y, tiny),
+            sxy: sum(&|r| r.x * r.y, tiny),
+            s_sigma_xx: sum(&|r| r.spin * r.x * r.x, tiny),
+            s_sigma_yy: sum(&|r| r.spin * r.y * r.y, tiny),
+            s_sigma_xy: sum(&|r| r.spin * r.x * r.y, tiny),
+            sx: first(&|r| r.x),
+            sy: first(&|r| r.y),
+            s_sigma_x: first(&|r| r.spin * r.x),
+            s_sigma_y: first(&|r| r.spin * r.y),
         }
     }
 }
 
-/// Eq. 22a–b: F_x, F_y = ρπR² N {u, v} (−C_H_mub R δt − C_H_mub_mu0 ν0 − C_H_mub_mu V_h
-/// + C_H_mub_muw w).
-fn in_plane_forces(b: &mut Builder, c: &Consts, o: ModelOptions) {
+/// Eq. 22a–b: F_x, F_y = ρπR² N {u, v} (−C_H_mub R δt − C_H_mub_mu0 ν0 −
+/// C_H_mub_mu V_h + C_H_mub_muw w), where N w is Σ w_i = N w + p Σy_i − q Σx_i (Eq. 18)
+/// for a general planar layout.
+fn in_plane_forces(b: &mut Builder, c: &Consts, o: ModelOptions, g: &Geometry) {
     use Signal::*;
     let kn = c.k * c.n;
     for (axis, s, name) in [(Axis::Fx, U, "u"), (Axis::Fy, V, "v")] {
@@ -854,7 +913,11 @@ fn in_plane_forces(b: &mut Builder, c: &Consts, o: ModelOptions) {
             axis,
             "C_H_mub_muw",
             &format!("{name}*w"),
-            vec![term(kn, &[s, W])],
+            vec![
+                term(kn, &[s, W]),
+                term(c.k * g.sy, &[s, P]),
+                term(-c.k * g.sx, &[s, Q]),
+            ],
         );
     }
 }
@@ -892,8 +955,17 @@ fn vertical_force(b: &mut Builder, c: &Consts, o: ModelOptions) {
     );
 }
 
-/// Eq. 22d–e: M_x and M_y.
-fn roll_pitch_moments(b: &mut Builder, c: &Consts, o: ModelOptions, class: ConfigurationClass) {
+/// Eq. 22d–e: M_x and M_y. A general planar layout adds, from the first moments
+/// Σx_i, Σy_i, Σσ_i x_i, Σσ_i y_i: −C_T_mu2 V_h² Σy_i (M_x) and +C_T_mu2 V_h² Σx_i (M_y)
+/// from the thrust's lever arm; ½ C_T_muw R {u, v} Σσ_i w_i in the C_T_muw column from
+/// the hub rolling/pitching moments' inflow term; Σ w_i in the hub-force lever term.
+fn roll_pitch_moments(
+    b: &mut Builder,
+    c: &Consts,
+    o: ModelOptions,
+    class: ConfigurationClass,
+    g: &Geometry,
+) {
     use Signal::*;
     let (k, r, n, h) = (c.k, c.r, c.n, c.h);
     // (axis, rotor-moment velocity, virtual actuator δ, δ², hub-force velocity, sign of
@@ -931,12 +1003,30 @@ fn roll_pitch_moments(b: &mut Builder, c: &Consts, o: ModelOptions, class: Confi
         }
         let mut muw = vec![term(k * r, &[W, d])];
         muw.extend(inflow_roll_pitch(axis, c, o.inflow, class));
+        // ½ R {u, v} Σσ_i w_i, Σσ_i w_i = p Σσ_i y_i − q Σσ_i x_i (balanced spins).
+        muw.extend([
+            term(0.5 * k * r * g.s_sigma_y, &[vr, P]),
+            term(-0.5 * k * r * g.s_sigma_x, &[vr, Q]),
+        ]);
         let label = if axis == Axis::Mx {
             "w*da - dnu_L"
         } else {
             "w*de - dnu_M"
         };
         b.col(axis, "C_T_muw", label, muw);
+        // Thrust lever arm of the rotor centroid: −Σy_i T_i (M_x), +Σx_i T_i (M_y).
+        let centroid = if axis == Axis::Mx { -g.sy } else { g.sx };
+        let vh2_label = if axis == Axis::Mx {
+            "-Sy*Vh^2"
+        } else {
+            "Sx*Vh^2"
+        };
+        b.col(
+            axis,
+            "C_T_mu2",
+            vh2_label,
+            vec![term(k * centroid, &[Vh, Vh])],
+        );
         let khn = sign * k * h * n;
         b.col(
             axis,
@@ -962,7 +1052,11 @@ fn roll_pitch_moments(b: &mut Builder, c: &Consts, o: ModelOptions, class: Confi
             axis,
             "C_H_mub_muw",
             &format!("h*{vhn}*w"),
-            vec![term(khn, &[vh, W])],
+            vec![
+                term(khn, &[vh, W]),
+                term(sign * k * h * g.sy, &[vh, P]),
+                term(-sign * k * h * g.sx, &[vh, Q]),
+            ],
         );
     }
 }
@@ -995,7 +1089,8 @@ fn inflow_roll_pitch(
                 }
                 // Δν_ℒ = ℓ²/2 (N p δt + q δr); Δν_ℳ = ℓ²/2 (N q δt + p δr).
                 ConfigurationClass::QuadX => t.push(term(-half, &[other, Dr])),
-                ConfigurationClass::Multirotor6Plus => {}
+                // (A general planar layout never takes the printed table: see `eq22`.)
+                ConfigurationClass::Multirotor6Plus | ConfigurationClass::GeneralPlanar => {}
             }
             t
         }
@@ -1026,9 +1121,9 @@ fn yaw_moment(
     // −C_Q_muw R² (w δr − Δν_𝒩).
     let mut muw = vec![term(-kr2, &[W, Dr])];
     // −C_Q_muw2 R N ℓ² Δν_𝒩².
-    let muw2;
+    let mut muw2;
     // C_H_mub_muw: v(pΣxy − qΣx²) − u(pΣy² − qΣxy), printed −½Nℓ²(up + vq).
-    let hw;
+    let mut hw;
     match o.inflow {
         InflowCorrection::Derived => {
             muw.extend([
@@ -1058,12 +1153,21 @@ fn yaw_moment(
                     muw.extend([term(-kr2, &[P, De]), term(-kr2, &[Q, Da])]);
                     muw2 = vec![term(-knl2, &[P, Q])];
                 }
-                ConfigurationClass::Multirotor6Plus => muw2 = Vec::new(),
+                ConfigurationClass::Multirotor6Plus | ConfigurationClass::GeneralPlanar => {
+                    muw2 = Vec::new()
+                }
             }
             let half = 0.5 * k * c.n * c.l2;
             hw = vec![term(-half, &[U, P]), term(-half, &[V, Q])];
         }
     }
+    // General planar layout: Σσ_i w_i² gains 2w Σσ_i w_i; the H and S forces' lever arms
+    // gain Σy_i u − Σx_i v times their state-only part.
+    muw2.extend([
+        term(2.0 * k * r * g.s_sigma_y, &[W, P]),
+        term(-2.0 * k * r * g.s_sigma_x, &[W, Q]),
+    ]);
+    hw.extend([term(-k * g.sy, &[U, W]), term(k * g.sx, &[V, W])]);
     b.col(Axis::Mz, "C_Q_muw", "w*dr - dnu_N", muw);
     b.col(Axis::Mz, "C_Q_muw2", "N*l^2*dnu_N2", muw2);
     b.col(
@@ -1073,6 +1177,42 @@ fn yaw_moment(
         vec![term(-k * r, &[U, Da]), term(-k * r, &[V, De])],
     );
     b.col(Axis::Mz, "C_H_mub_muw", "l^2*(u*p + v*q)", hw);
+    // The rest of a general planar layout's M_z: −σ_i 𝒬_i's inflow-squared part
+    // R (C_σ/2) Σσ_i Λ_i², Λ_i = ν0 + C_νμ V_h − (1 − C_νw) w_i, gives
+    // −R (2 C_T_muw ν0 + C_Q_mu_muw V_h) Σσ_i w_i; Σ(y_i H_i + x_i S_i) gives
+    // (C_H_mub_mu0 ν0 + C_H_mub_mu V_h)(u Σy_i − v Σx_i).
+    b.col(
+        Axis::Mz,
+        "C_T_muw",
+        "-2*nu0*(p*Ssy - q*Ssx)",
+        vec![
+            term(-2.0 * k * r * c.nu0 * g.s_sigma_y, &[P]),
+            term(2.0 * k * r * c.nu0 * g.s_sigma_x, &[Q]),
+        ],
+    );
+    b.col(
+        Axis::Mz,
+        "C_H_mub_mu0",
+        "nu0*(u*Sy - v*Sx)",
+        vec![term(k * c.nu0 * g.sy, &[U]), term(-k * c.nu0 * g.sx, &[V])],
+    );
+    if o.linear_vh_terms {
+        b.col(
+            Axis::Mz,
+            "C_H_mub_mu",
+            "Vh*(u*Sy - v*Sx)",
+            vec![term(k * g.sy, &[U, Vh]), term(-k * g.sx, &[V, Vh])],
+        );
+        b.col(
+            Axis::Mz,
+            "C_Q_mu_muw",
+            "-Vh*(p*Ssy - q*Ssx)",
+            vec![
+                term(-k * r * g.s_sigma_y, &[Vh, P]),
+                term(k * r * g.s_sigma_x, &[Vh, Q]),
+            ],
+        );
+    }
 }
 
 /// J_z q δr (M_x), −J_z p δr (M_y), J_z δ̇r (M_z): columns of `J_z` or known terms.

@@ -16,14 +16,15 @@
 //! | `C_T0` | K | | `C_Q_mu` | K C_νμ |
 //! | `C_T_mu0` | C_σ / 2 | | `C_Q_muw` | K (1 − C_νw) |
 //! | `C_T_mu` | C_σ C_νμ / 2 | | `C_Q_muw2` | C_σ (1 − C_νw)² / 2 |
-//! | `C_T_mu2` | G | | | |
+//! | `C_T_mu2` | G | | `C_Q_mu_muw` | C_σ C_νμ (1 − C_νw) |
 //!
 //! Differences from the printed seed, found by this derivation:
 //! - Eq. 8e multiplies by μ_u; Eq. 5e (and Eq. 22e, which uses v δr) has μ_v. Eq. 5e is
 //!   right: the pitching moment comes from lateral velocity.
 //! - Eq. 8f lists `C_Q_mu_muw μ μ_w` twice; in the multirotor sum every term of C_Q that
 //!   does not vary from rotor to rotor cancels (Σσ_i = 0), so only the μ_w-dependent
-//!   terms reach Eq. 22f.
+//!   terms reach Eq. 22f. Of those, the μ μ_w term (`C_Q_mu_muw`) also cancels under
+//!   Assumption 2 (Σσ_i w_i = 0) and appears only for general planar layouts.
 //! - The hub rolling and pitching moments of Eq. 5d–e, carried to the airframe by
 //!   Eq. 11 as printed (σ(−ℛ, 𝒫)), have the wrong sign: for σ = +1 in forward flight the
 //!   advancing blade is on the left and rolls the vehicle right (M_x > 0), where the
@@ -153,6 +154,8 @@ impl BladeConstants {
             ("C_Q_mu", k * self.c_nu_mu),
             ("C_Q_muw", k * one_minus_cw),
             ("C_Q_muw2", cs * one_minus_cw * one_minus_cw / 2.0),
+            // Eq. 8f's μ μ_w term: reaches Eq. 22f only for a general planar layout.
+            ("C_Q_mu_muw", cs * self.c_nu_mu * one_minus_cw),
         ])
     }
 }

@@ -2,9 +2,18 @@
 //!
 //! A [`Vehicle`] is read from the TOML format of `docs/vehicle-file.md` (an explicit
 //! rotor table or a preset) or built from a [`Preset`]. Construction checks physical validity (positive mass,
-//! symmetric positive-definite inertia, …) and Assumption 2 of the seed (even rotor count
-//! ≥ 4, alternating spin, equal arms, equal interior angles, symmetry about both body axes,
-//! coplanar rotors at one height), then classifies the layout per Definition 1.
+//! symmetric positive-definite inertia, …) and the layout.
+//!
+//! Layouts: the model (`crate::model`) is built from per-rotor sums, so it holds for any
+//! *planar* layout with an even rotor count N ≥ 4, balanced spins (N/2 rotors each way),
+//! coplanar uncanted rotors at one height, and a mixing matrix of full rank (thrust, roll,
+//! pitch and yaw can be commanded independently); a layout that breaks one of these is
+//! refused with the failing condition named. The rest of the seed's Assumption 2 (equal
+//! arms, equal interior angles, alternating spin between neighbours, symmetry about both
+//! body axes) is not needed: a layout that breaks it is accepted as a *general planar*
+//! layout and each breach is reported as a note ([`Vehicle::assumption2_breaches`],
+//! [`Vehicle::notes`]), not an error. Layouts that satisfy Assumption 2 are classified per
+//! Definition 1.
 //!
 //! Axes are body FRD: x forward, y right, z down. Rotor positions are hub positions
 //! relative to the centre of gravity, in metres. A rotor's spin `sigma = +1` means its
@@ -47,6 +56,9 @@ pub enum ConfigurationClass {
     QuadX,
     /// N ≥ 6.
     Multirotor6Plus,
+    /// A supported layout that breaks Assumption 2 (Definition 1 does not apply): the
+    /// model uses the general per-rotor sums of `crate::model`.
+    GeneralPlanar,
 }
 
 impl fmt::Display for ConfigurationClass {
@@ -55,6 +67,7 @@ impl fmt::Display for ConfigurationClass {
             Self::QuadPlus => "quadrotor+",
             Self::QuadX => "quadrotorx",
             Self::Multirotor6Plus => "multirotor>=6",
+            Self::GeneralPlanar => "general planar",
         })
     }
 }
@@ -194,10 +207,12 @@ pub enum VehicleErrorKind {
         /// What is wrong.
         problem: String,
     },
-    /// Assumption 2 of the seed does not hold.
+    /// A condition of the seed's Assumption 2 that the general planar model needs too
+    /// (even rotor count, balanced spins, coplanar uncanted rotors, a mixing matrix of
+    /// full rank) does not hold.
     #[error("Assumption 2 fails ({condition}): {detail}")]
     Assumption2 {
-        /// The failing condition, e.g. "alternating spin".
+        /// The failing condition, e.g. "balanced spins".
         condition: &'static str,
         /// Which rotors and by how much.
         detail: String,
@@ -212,6 +227,26 @@ pub struct VehicleError {
     pub source_name: VehicleSource,
     /// What is wrong.
     pub kind: VehicleErrorKind,
+}
+
+/// One condition of the seed's Assumption 2 that an accepted (general planar) layout
+/// breaks. Reported as a note, not an error: the model stays exact (see `crate::model`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Assumption2Breach {
+    /// The condition, e.g. "equal arms".
+    pub condition: &'static str,
+    /// Which rotors and by how much.
+    pub detail: String,
+}
+
+impl fmt::Display for Assumption2Breach {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "Assumption 2 does not hold ({}): {}",
+            self.condition, self.detail
+        )
+    }
 }
 
 /// Mass, inertia, air and rotor properties shared by every layout.
@@ -231,7 +266,8 @@ pub struct MassAndRotorProperties {
     pub rotor_inertia: f64,
 }
 
-/// A multirotor that satisfies Assumption 2, classified per Definition 1.
+/// A multirotor with a supported planar layout: one that satisfies Assumption 2 (then
+/// classified per Definition 1) or a general planar layout (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Vehicle {
     /// Human-readable name.
@@ -242,6 +278,7 @@ pub struct Vehicle {
     arm_length: f64,
     class: ConfigurationClass,
     tolerance: f64,
+    breaches: Vec<Assumption2Breach>,
 }
 
 /// The vehicle TOML layout (`docs/vehicle-file.md`), unchecked. Embedded as is in
@@ -387,8 +424,13 @@ impl Vehicle {
     ) -> Result<Self, VehicleErrorKind> {
         check_properties(&props)?;
         check_positive("geometry_tolerance", tol)?;
-        let arm_length = check_assumption2(&rotors, tol)?;
-        let class = classify(&rotors, arm_length, tol);
+        let arm_length = check_layout(&rotors, tol)?;
+        let breaches = assumption2_breaches(&rotors, arm_length, tol);
+        let class = if breaches.is_empty() {
+            classify(&rotors, arm_length, tol)
+        } else {
+            ConfigurationClass::GeneralPlanar
+        };
         Ok(Self {
             name,
             props,
@@ -396,6 +438,7 @@ impl Vehicle {
             arm_length,
             class,
             tolerance: tol,
+            breaches,
         })
     }
 
@@ -414,9 +457,45 @@ impl Vehicle {
         self.arm_length
     }
 
-    /// Configuration class of Definition 1.
+    /// Configuration class of Definition 1, or [`ConfigurationClass::GeneralPlanar`] when
+    /// the layout breaks Assumption 2.
     pub fn class(&self) -> ConfigurationClass {
         self.class
+    }
+
+    /// Tolerance of the layout checks (relative to ℓ for lengths, rad for angles).
+    pub fn geometry_tolerance(&self) -> f64 {
+        self.tolerance
+    }
+
+    /// The conditions of Assumption 2 this (accepted) layout breaks, at most one entry per
+    /// condition; empty when Assumption 2 holds.
+    pub fn assumption2_breaches(&self) -> &[Assumption2Breach] {
+        &self.breaches
+    }
+
+    /// True when the layout satisfies the seed's Assumption 2 (within the tolerance).
+    pub fn satisfies_assumption2(&self) -> bool {
+        self.breaches.is_empty()
+    }
+
+    /// Notes for the user, one line each (the CLI prints them on stderr as `note: …`):
+    /// each Assumption 2 breach, then what the model does about it. Empty when
+    /// Assumption 2 holds.
+    pub fn notes(&self) -> Vec<String> {
+        if self.breaches.is_empty() {
+            return Vec::new();
+        }
+        let mut notes: Vec<String> = self
+            .breaches
+            .iter()
+            .map(|b| format!("vehicle `{}`: {b}", self.name))
+            .collect();
+        notes.push(format!(
+            "vehicle `{}` is identified as a general planar layout: Eq. 22 is built from per-rotor sums over its rotor positions and spins (exact, with the extra centroid and spin-offset terms; Definition 1 and the printed case table do not apply)",
+            self.name
+        ));
+        notes
     }
 
     /// Area of one rotor disk πR², m².
@@ -479,6 +558,8 @@ impl Vehicle {
         for r in &mut v.rotors {
             r.spin = -r.spin;
         }
+        // The breach details name spins: describe the reversed ones.
+        v.breaches = assumption2_breaches(&v.rotors, v.arm_length, v.tolerance);
         v
     }
 }
@@ -627,8 +708,11 @@ fn check_inertia(i: &[[f64; 3]; 3]) -> Result<(), VehicleErrorKind> {
     Ok(())
 }
 
-/// Checks Assumption 2 and returns the arm length ℓ (mean hub radius), m.
-fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind> {
+/// Checks the conditions the (general planar) model needs and returns the arm length ℓ
+/// (mean hub radius), m: at most [`MAX_ROTORS`] rotors, an even count N ≥ 4, no two rotors
+/// at one position, balanced spins and a mixing matrix of rank 4. Cant and height are
+/// checked per rotor when the file is read.
+fn check_layout(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind> {
     let n = rotors.len();
     let fail = |condition, detail| Err(VehicleErrorKind::Assumption2 { condition, detail });
     if n > MAX_ROTORS {
@@ -642,14 +726,9 @@ fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind
             format!("the vehicle has {n} rotors"),
         );
     }
-    let radii: Vec<f64> = rotors.iter().map(|r| r.x.hypot(r.y)).collect();
-    let arm = radii.iter().sum::<f64>() / n as f64;
-    // Arms are compared with the median, so the odd one out is the one reported.
-    let mut sorted = radii.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0;
-    if median <= 0.0 {
-        return fail("equal arms", "rotors sit on the CG".into());
+    let arm = rotors.iter().map(|r| r.x.hypot(r.y)).sum::<f64>() / n as f64;
+    if arm <= 0.0 {
+        return fail("rotors off the CG", "every rotor sits on the CG".into());
     }
     for i in 0..n {
         for j in i + 1..n {
@@ -662,9 +741,79 @@ fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind
             }
         }
     }
+    let cw = rotors.iter().filter(|r| r.spin > 0.0).count();
+    if 2 * cw != n {
+        return fail(
+            "balanced spins",
+            format!(
+                "{cw} rotors spin +1 and {} spin -1: the rotor torques do not cancel in hover (the model needs N/2 rotors each way)",
+                n - cw
+            ),
+        );
+    }
+    check_mixing_rank(rotors, arm, tol)
+        .map(|()| arm)
+        .or_else(|detail| fail("independent thrust, roll, pitch and yaw", detail))
+}
+
+/// The rows 1, y_i, x_i, σ_i of the mixing matrix (Eq. 20, lengths over ℓ) must be linearly
+/// independent: otherwise two of thrust, roll, pitch and yaw cannot be commanded apart
+/// (e.g. spins following the sign of y_i couple yaw to roll). Smallest singular value
+/// relative to the largest at most `tol` counts as dependent; the error names the
+/// dependency.
+fn check_mixing_rank(rotors: &[Rotor], arm: f64, tol: f64) -> Result<(), String> {
+    let n = rotors.len();
+    let m = nalgebra::DMatrix::from_fn(n, 4, |i, c| match c {
+        0 => 1.0,
+        1 => rotors[i].x / arm,
+        2 => rotors[i].y / arm,
+        _ => rotors[i].spin,
+    });
+    let svd = m.svd(false, true);
+    let sv = &svd.singular_values;
+    let (lo, hi) = (sv.min(), sv.max());
+    if lo > tol * hi {
+        return Ok(());
+    }
+    let v_t = svd.v_t.expect("requested");
+    let k = sv.imin();
+    let c: Vec<f64> = (0..4).map(|j| v_t[(k, j)]).collect();
+    let big = c.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+    let names = ["1", "x_i/l", "y_i/l", "spin_i"];
+    let combo: Vec<String> = c
+        .iter()
+        .zip(names)
+        .filter(|(x, _)| x.abs() > 1e-6 * big)
+        .map(|(x, name)| format!("{:+.3}*{name}", x / big))
+        .collect();
+    Err(format!(
+        "the mixing matrix (Eq. 20) has rank 3: {} = 0 for every rotor (l = {arm:.4} m), so the rotors cannot produce thrust, roll, pitch and yaw moment independently",
+        combo.join(" ")
+    ))
+}
+
+/// The conditions of Assumption 2 beyond those [`check_layout`] enforces: equal arms,
+/// equal interior angles 2π/N, opposite spins of azimuthal neighbours, symmetry about
+/// both body axes. The first offence of each condition is reported.
+fn assumption2_breaches(rotors: &[Rotor], arm: f64, tol: f64) -> Vec<Assumption2Breach> {
+    let n = rotors.len();
+    let mut out = Vec::new();
+    let mut breach = |condition, detail| {
+        if !out
+            .iter()
+            .any(|b: &Assumption2Breach| b.condition == condition)
+        {
+            out.push(Assumption2Breach { condition, detail });
+        }
+    };
+    let radii: Vec<f64> = rotors.iter().map(|r| r.x.hypot(r.y)).collect();
+    // Arms are compared with the median, so the odd one out is the one reported.
+    let mut sorted = radii.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0;
     for (i, r) in radii.iter().enumerate() {
         if (r - median).abs() > tol * median {
-            return fail(
+            breach(
                 "equal arms",
                 format!(
                     "rotor {} has arm {r:.6} m, the median arm is {median:.6} m (tolerance {:.2e} m)",
@@ -674,14 +823,6 @@ fn check_assumption2(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErrorKind
             );
         }
     }
-    check_angles_and_spin(rotors, tol)?;
-    check_symmetry(rotors, arm, tol)?;
-    Ok(arm)
-}
-
-/// Equal interior angles 2π/N and alternating spin between azimuthal neighbours.
-fn check_angles_and_spin(rotors: &[Rotor], tol: f64) -> Result<(), VehicleErrorKind> {
-    let n = rotors.len();
     let mut order: Vec<(f64, usize)> = rotors
         .iter()
         .enumerate()
@@ -694,62 +835,57 @@ fn check_angles_and_spin(rotors: &[Rotor], tol: f64) -> Result<(), VehicleErrorK
         let (a1, i1) = order[(k + 1) % n];
         let d = (a1 - a0).rem_euclid(2.0 * PI);
         if (d - gap).abs() > tol {
-            return Err(VehicleErrorKind::Assumption2 {
-                condition: "equal interior angles",
-                detail: format!(
+            breach(
+                "equal interior angles",
+                format!(
                     "rotors {} and {} are {:.4} deg apart, expected {:.4} deg",
                     i0 + 1,
                     i1 + 1,
                     d.to_degrees(),
                     gap.to_degrees()
                 ),
-            });
+            );
         }
         if rotors[i0].spin == rotors[i1].spin {
-            return Err(VehicleErrorKind::Assumption2 {
-                condition: "neighbouring rotors spin in opposite directions",
-                detail: format!(
+            breach(
+                "neighbouring rotors spin in opposite directions",
+                format!(
                     "neighbouring rotors {} and {} both have spin {:+}",
                     i0 + 1,
                     i1 + 1,
                     rotors[i0].spin
                 ),
-            });
+            );
         }
     }
-    Ok(())
-}
-
-/// Every rotor has a mirror image about the body x axis and about the body y axis.
-fn check_symmetry(rotors: &[Rotor], arm: f64, tol: f64) -> Result<(), VehicleErrorKind> {
     let has = |x: f64, y: f64| rotors.iter().any(|r| (r.x - x).hypot(r.y - y) <= tol * arm);
     for (i, r) in rotors.iter().enumerate() {
         if !has(r.x, -r.y) {
-            return Err(VehicleErrorKind::Assumption2 {
-                condition: "symmetric about the body x axis",
-                detail: format!(
+            breach(
+                "symmetric about the body x axis",
+                format!(
                     "rotor {} at ({}, {}) m has no mirror image at y = {}",
                     i + 1,
                     r.x,
                     r.y,
                     -r.y
                 ),
-            });
+            );
         }
         if !has(-r.x, r.y) {
-            return Err(VehicleErrorKind::Assumption2 {
-                condition: "symmetric about the body y axis",
-                detail: format!(
+            breach(
+                "symmetric about the body y axis",
+                format!(
                     "rotor {} at ({}, {}) m has no mirror image at x = {}",
                     i + 1,
                     r.x,
                     r.y,
                     -r.x
                 ),
-            });
+            );
         }
     }
-    Ok(())
+    out
 }
 
 /// Definition 1 (seed §4.2).
@@ -803,6 +939,20 @@ mod tests {
         let text = toml::to_string(&v.definition()).unwrap();
         let back = Vehicle::from_toml_str(&text, VehicleSource::Code).unwrap();
         assert_eq!(back, v);
+    }
+
+    #[test]
+    fn reversed_spins_describe_the_reversed_vehicle() {
+        // A hexa with neighbours 1–2 spinning alike: a general planar layout.
+        let mut rotors = Preset::HexaX.rotors(0.3, 1.0);
+        rotors[1].spin = 1.0;
+        rotors[2].spin = -1.0;
+        let v = Vehicle::from_rotors("t", props(), rotors).unwrap();
+        let detail = |v: &Vehicle| v.assumption2_breaches()[0].detail.clone();
+        assert_eq!(v.class(), ConfigurationClass::GeneralPlanar);
+        assert!(detail(&v).ends_with("both have spin +1"), "{}", detail(&v));
+        let r = v.with_spins_reversed();
+        assert!(detail(&r).ends_with("both have spin -1"), "{}", detail(&r));
     }
 
     #[test]

@@ -67,7 +67,8 @@ pub fn rotors_from_parameters(params: &BTreeMap<String, f64>) -> Result<Vec<Px4R
 /// The vehicle TOML skeleton for `rotors` (from log `log_name`, vehicle `name`): the
 /// rotor table, spins and hub height filled in; mass, inertia, rotor radius and rotor
 /// inertia left as commented lines for the user. The last comment says whether the
-/// layout satisfies the seed's Assumption 2 (the vehicle loader refuses it otherwise).
+/// layout satisfies the seed's Assumption 2, is accepted as a general planar layout (with
+/// notes), or is refused.
 pub fn vehicle_skeleton(rotors: &[Px4Rotor], name: &str, log_name: &str) -> String {
     let n = rotors.len().max(1) as f64;
     // PX4 stores the parameters as f32: print them at f32 precision (+ 0.0 clears −0).
@@ -108,7 +109,8 @@ pub fn vehicle_skeleton(rotors: &[Px4Rotor], name: &str, log_name: &str) -> Stri
     s
 }
 
-/// Whether the rotor layout satisfies the seed's Assumption 2, in words.
+/// Whether the rotor layout satisfies the seed's Assumption 2, is a general planar layout
+/// the vehicle loader accepts with a note, or is refused, in words.
 pub fn layout_check(rotors: &[Px4Rotor]) -> String {
     let props = MassAndRotorProperties {
         mass: 1.0,
@@ -127,15 +129,24 @@ pub fn layout_check(rotors: &[Px4Rotor]) -> String {
         })
         .collect();
     match Vehicle::from_rotors("px4", props, table) {
-        Ok(v) => format!(
+        Ok(v) if v.satisfies_assumption2() => format!(
             "satisfies Assumption 2 (arm length {:.4} m, {:?})",
             v.arm_length(),
             v.class()
         ),
-        Err(e) => format!(
-            "the vehicle loader will refuse this layout: {} (general planar layouts are not supported yet)",
-            e.kind
-        ),
+        Ok(v) => {
+            let breaches: Vec<String> = v
+                .assumption2_breaches()
+                .iter()
+                .map(|b| b.to_string())
+                .collect();
+            format!(
+                "general planar layout (mean arm {:.4} m), accepted with a note: {}",
+                v.arm_length(),
+                breaches.join("; ")
+            )
+        }
+        Err(e) => format!("the vehicle loader will refuse this layout: {}", e.kind),
     }
 }
 
@@ -190,9 +201,34 @@ mod tests {
             (0.29, -0.24, -0.05),
             (-0.29, 0.24, -0.05),
         ]);
+        // A rectangle (H-frame): equal arms, unequal angles.
         let text = layout_check(&rotors_from_parameters(&p).unwrap());
         assert!(
-            text.contains("satisfies") || text.contains("refuse"),
+            text.starts_with("general planar layout") && text.contains("(equal interior angles)"),
+            "{text}"
+        );
+        // The SITL airframe's arms (0.288 m front, 0.241 m rear): accepted, with a note.
+        let p = params([
+            (0.1515, 0.245, 0.05),
+            (-0.1515, -0.1875, 0.05),
+            (0.1515, -0.245, -0.05),
+            (-0.1515, 0.1875, -0.05),
+        ]);
+        let text = layout_check(&rotors_from_parameters(&p).unwrap());
+        assert!(
+            text.starts_with("general planar layout") && text.contains("(equal arms)"),
+            "{text}"
+        );
+        // Three rotors spinning one way: refused.
+        let p = params([
+            (0.15, 0.15, 0.05),
+            (-0.15, -0.15, 0.05),
+            (0.15, -0.15, -0.05),
+            (-0.15, 0.15, 0.05),
+        ]);
+        let text = layout_check(&rotors_from_parameters(&p).unwrap());
+        assert!(
+            text.contains("refuse") && text.contains("balanced spins"),
             "{text}"
         );
     }
