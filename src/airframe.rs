@@ -12,6 +12,7 @@
 //! blade-element simulator confirms the corrected sign (`tests/sim_rotor.rs`).
 
 use crate::rotor::BladeConstants;
+use crate::util::cross;
 use crate::vehicle::Vehicle;
 
 /// Airframe force (N) and moment (N m) in body axes, `[F_x, F_y, F_z, M_x, M_y, M_z]`,
@@ -56,13 +57,4 @@ pub fn closed_form_wrench(
         }
     }
     wrench
-}
-
-/// Cross product a × b.
-pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use mrsysid::Identification;
 use mrsysid::estimate::{self, ResidualDiagnostics};
-use mrsysid::identified::{IdentifiedModel, write_atomically};
+use mrsysid::identified::IdentifiedModel;
 use mrsysid::io::{self, InvalidSamples, Mapping, ReadOptions};
 use mrsysid::model::{ModelOptions, Workspace};
 use mrsysid::pipeline::{FitOutcome, Holdout, PlotSeries};
@@ -16,6 +16,7 @@ use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
 use mrsysid::sample::Axis;
 use mrsysid::stats::Accumulator;
+use mrsysid::util::write_atomically;
 use mrsysid::vehicle::Vehicle;
 use statrs::distribution::{ContinuousCDF, Normal};
 

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{Column, ModelError, ModelOptions, ModelStructure, Parameter, Workspace};
 use crate::sample::{Axis, Sample, SampleChunk};
+use crate::util::write_atomically;
 use crate::vehicle::{Vehicle, VehicleDefinition, VehicleSource};
 
 /// Version of the model-file layout written by [`IdentifiedModel::save`].
@@ -319,15 +320,4 @@ fn covariance_matrix(rows: Vec<Vec<f64>>, n: usize) -> Result<DMatrix<f64>, Stri
         return Err("covariance: a value is not a finite number".into());
     }
     Ok(DMatrix::from_fn(n, n, |i, j| rows[i][j]))
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".partial");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
 }

@@ -50,6 +50,7 @@
 //! - [`identified`]: the saved model file, prediction with an identified model;
 //! - [`report`]: the report (tables, JSON) and, with the `plots` feature, plots;
 //! - [`error`]: the library's [`Error`];
+//! - [`util`]: vector algebra, quaternion rotation, atomic file writes;
 //! - [`sim`]: the truth simulator (blade-element rotors, effects, sweeps, flights).
 //!
 //! # Features
@@ -76,6 +77,7 @@ pub mod sample;
 pub mod sim;
 pub mod source;
 pub mod stats;
+pub mod util;
 pub mod vehicle;
 
 pub use error::Error;

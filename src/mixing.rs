@@ -13,6 +13,7 @@
 //! requires rank 4 (thrust, roll, pitch and yaw independently commandable) and balanced
 //! spins (Σσ_i = 0, so δr = 0 at equal speeds).
 
+use crate::util::dot;
 use crate::vehicle::Vehicle;
 
 /// Index of a virtual actuator in the arrays returned here (row of Eq. 20).
@@ -142,10 +143,6 @@ fn mix4<const SQUARE: bool, const FIRST: bool>(g: &[(f64, &[f64]); 4], dst: &mut
         let v = m0 * f(a) + m1 * f(b) + m2 * f(c) + m3 * f(d);
         *out = if FIRST { v } else { *out + v };
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 #[cfg(test)]

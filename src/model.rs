@@ -750,7 +750,7 @@ impl ModelStructure {
                     let quat = [q[0][i], q[1][i], q[2][i], q[3][i]];
                     let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
                     // Body→NED matrix R: the NED→body element (k, j) is R[j][k].
-                    let r = crate::io::derive::quat_to_matrix(quat.map(|c| c / norm));
+                    let r = crate::util::quat_to_matrix(quat.map(|c| c / norm));
                     *d = r[j][k];
                 }
             }

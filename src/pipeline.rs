@@ -24,7 +24,7 @@ use crate::estimate::{
 };
 use crate::io::{self, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Workspace};
-use crate::sample::SampleChunk;
+use crate::sample::{SampleChunk, Signals};
 use crate::source::LogSource;
 use crate::stats::{AccumulateError, Accumulator};
 use crate::vehicle::Vehicle;
@@ -138,25 +138,7 @@ struct LogStats {
     screening: Thinned,
     summary: Summary,
     /// Optional signals of the log's first chunk, `None` for a log without samples.
-    signals: Option<OptionalSignals>,
-}
-
-/// Which optional signals a log carries (they decide the candidate effects).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct OptionalSignals {
-    height: bool,
-    omega_dot: bool,
-    attitude: bool,
-}
-
-impl OptionalSignals {
-    fn of(chunk: &SampleChunk) -> Self {
-        Self {
-            height: chunk.height.len() == chunk.len(),
-            omega_dot: chunk.has_omega_dot(),
-            attitude: chunk.attitude[0].len() == chunk.len(),
-        }
-    }
+    signals: Option<Signals>,
 }
 
 /// What the second pass needs to know of a log from the first: the samples routed to
@@ -214,7 +196,7 @@ fn read_log(
             .map_err(accumulate_error(source))
     };
     let summary = stream_log(source, req, overlap, |chunk| {
-        signals.get_or_insert_with(|| OptionalSignals::of(chunk));
+        signals.get_or_insert_with(|| chunk.signals());
         split.route(chunk, &mut sink)
     })?;
     split.finish(&mut sink)?;
@@ -639,7 +621,7 @@ impl Extended {
     fn new(
         req: &FitRequest,
         fit: &Fit,
-        signals: OptionalSignals,
+        signals: Signals,
         screening: &SampleChunk,
         options: &DiagnoseOptions,
     ) -> Result<Self, Error> {
@@ -693,7 +675,7 @@ fn second_pass(
     req: &FitRequest,
     jobs: &[(LogSource, Role)],
     counts: &[LogCounts],
-    signals: Option<OptionalSignals>,
+    signals: Option<Signals>,
     screening: &SampleChunk,
     out: &mut FitOutcome,
 ) -> Result<(), Error> {

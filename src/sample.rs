@@ -111,6 +111,27 @@ impl SampleChunk {
         !self.omega_dot.is_empty()
     }
 
+    /// True when the CG height is present.
+    pub fn has_height(&self) -> bool {
+        !self.height.is_empty()
+    }
+
+    /// True when the attitude is present.
+    pub fn has_attitude(&self) -> bool {
+        !self.attitude[0].is_empty()
+    }
+
+    /// Rotor count and optional signals of the chunk (the one presence check: optional
+    /// vectors are empty or full, see [`SampleChunk`]).
+    pub fn signals(&self) -> Signals {
+        Signals {
+            rotors: self.rotor_count(),
+            omega_dot: self.has_omega_dot(),
+            height: self.has_height(),
+            attitude: self.has_attitude(),
+        }
+    }
+
     /// Removes all samples, keeping the allocations.
     pub fn clear(&mut self) {
         self.t.clear();
@@ -189,7 +210,8 @@ impl SampleChunk {
             omega_dot: self.omega_dot.iter().map(|v| v[k]).collect(),
             wrench: self.wrench.each_ref().map(|v| v[k]),
             height: self.height.get(k).copied(),
-            attitude: (!self.attitude[0].is_empty())
+            attitude: self
+                .has_attitude()
                 .then(|| self.attitude.each_ref().map(|v| v[k])),
         }
     }
@@ -223,6 +245,20 @@ mod tests {
     }
 }
 
+/// Rotor count and which optional signals (Ω̇, height, attitude) data carry: they decide
+/// which model terms and candidate effects the data can support.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Signals {
+    /// Number of rotor speed series.
+    pub rotors: usize,
+    /// Rotor accelerations Ω̇_i present.
+    pub omega_dot: bool,
+    /// CG height present.
+    pub height: bool,
+    /// Attitude quaternion present.
+    pub attitude: bool,
+}
+
 /// One sample of the data contract (array of structures form, for convenience APIs).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Sample {
@@ -242,4 +278,16 @@ pub struct Sample {
     pub height: Option<f64>,
     /// Attitude quaternion body→NED `[qw, qx, qy, qz]`, when logged.
     pub attitude: Option<[f64; 4]>,
+}
+
+impl Sample {
+    /// Rotor count and optional signals of the sample.
+    pub fn signals(&self) -> Signals {
+        Signals {
+            rotors: self.omega.len(),
+            omega_dot: !self.omega_dot.is_empty(),
+            height: self.height.is_some(),
+            attitude: self.attitude.is_some(),
+        }
+    }
 }

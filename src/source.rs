@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use crate::io::error::{ErrorKind, IoError, Location, display_name};
 use crate::io::validate::QUATERNION_NORM_TOLERANCE;
-use crate::sample::{Sample, SampleChunk};
+use crate::sample::{Sample, SampleChunk, Signals};
 
 /// One log of a fit: a file, or samples in memory.
 #[derive(Debug, Clone)]
@@ -66,10 +66,10 @@ impl MemoryLog {
         samples: impl IntoIterator<Item = Sample>,
     ) -> Result<Self, IoError> {
         let mut log = Self::empty(name);
-        let mut shape: Option<Shape> = None;
+        let mut shape: Option<Signals> = None;
         let mut chunk: Option<SampleChunk> = None;
         for (k, s) in samples.into_iter().enumerate() {
-            let expected = *shape.get_or_insert_with(|| Shape::of_sample(&s));
+            let expected = *shape.get_or_insert_with(|| s.signals());
             expected.check(name, k as u64, &s)?;
             let c = chunk.get_or_insert_with(|| expected.chunk());
             c.push(&s);
@@ -160,40 +160,19 @@ impl MemoryLog {
     }
 }
 
-/// Rotor count and optional signals (Ω̇, height, attitude) a log carries.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Shape {
-    rotors: usize,
-    omega_dot: bool,
-    height: bool,
-    attitude: bool,
+/// What a log of `signals` needs per sample.
+trait Expected {
+    /// An empty chunk with these signals.
+    fn chunk(self) -> SampleChunk;
+    /// Sample `k` of log `name` carries these signals.
+    fn check(self, name: &str, k: u64, s: &Sample) -> Result<(), IoError>;
 }
 
-impl Shape {
-    fn of_sample(s: &Sample) -> Self {
-        Self {
-            rotors: s.omega.len(),
-            omega_dot: !s.omega_dot.is_empty(),
-            height: s.height.is_some(),
-            attitude: s.attitude.is_some(),
-        }
-    }
-
-    fn of_chunk(c: &SampleChunk) -> Self {
-        Self {
-            rotors: c.rotor_count(),
-            omega_dot: c.has_omega_dot(),
-            height: !c.height.is_empty(),
-            attitude: !c.attitude[0].is_empty(),
-        }
-    }
-
-    /// An empty chunk of this shape.
+impl Expected for Signals {
     fn chunk(self) -> SampleChunk {
         SampleChunk::with_capacity(self.rotors, crate::CHUNK_SAMPLES, self.omega_dot)
     }
 
-    /// Sample `k` of log `name` has this shape.
     fn check(self, name: &str, k: u64, s: &Sample) -> Result<(), IoError> {
         let err = |field: &str, m: String| {
             IoError::new(
@@ -307,7 +286,7 @@ pub(crate) fn check_lengths(c: &SampleChunk) -> Result<(), (String, String)> {
 
 /// `c` carries the same rotor count and optional signals as `prev`.
 fn check_same_signals(prev: &SampleChunk, c: &SampleChunk) -> Result<(), String> {
-    let (was, is) = (Shape::of_chunk(prev), Shape::of_chunk(c));
+    let (was, is) = (prev.signals(), c.signals());
     if was == is {
         Ok(())
     } else {

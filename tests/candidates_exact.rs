@@ -6,11 +6,12 @@
 mod closed_form_common;
 
 use closed_form_common::{BLADE, vehicle};
-use mrsysid::airframe::{closed_form_wrench, cross};
+use mrsysid::airframe::closed_form_wrench;
 use mrsysid::diagnose::{CandidateContext, EffectKind, library};
-use mrsysid::io::derive::quat_to_matrix;
 use mrsysid::model::{ModelOptions, ModelStructure};
 use mrsysid::sample::Sample;
+use mrsysid::util::cross;
+use mrsysid::util::quat_to_matrix;
 use mrsysid::vehicle::{Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};

@@ -6,7 +6,7 @@
 mod closed_form_common;
 
 use closed_form_common::{BLADE, vehicle};
-use mrsysid::airframe::{closed_form_wrench, cross};
+use mrsysid::airframe::closed_form_wrench;
 use mrsysid::diagnose::{
     CandidateContext, CandidateStatistics, DiagnoseOptions, SCREENING_SAMPLES, Thinned,
     candidate_set, diagnose,
@@ -15,6 +15,7 @@ use mrsysid::estimate::{FitOptions, Folds, fit};
 use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
 use mrsysid::sample::{Sample, SampleChunk};
 use mrsysid::stats::Accumulator;
+use mrsysid::util::cross;
 use mrsysid::vehicle::{Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};

@@ -30,6 +30,7 @@
 use super::candidates::{Candidate, CandidateParameter, EffectKind};
 use crate::model::{Column, ModelError, ModelStructure, Parameter, Signal, Workspace, term};
 use crate::sample::{Axis, SampleChunk};
+use crate::util::dot;
 
 /// The pool's variables: states and virtual actuators.
 const VARIABLES: [(Signal, &str); 10] = [
@@ -160,10 +161,6 @@ fn evaluate(
     let mut ws = Workspace::default();
     s.assemble(data, &mut ws)?;
     Ok(ws)
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// Orthonormal basis of columns added one at a time (Gram–Schmidt, applied twice).

@@ -769,9 +769,9 @@ pub fn diagnose_chunks(
         vehicle,
         structure: base,
         theta: &fit.mmr.theta,
-        has_height: first.is_some_and(|c| c.height.len() == c.len() && !c.is_empty()),
+        has_height: first.is_some_and(|c| !c.is_empty() && c.has_height()),
         has_omega_dot: first.is_some_and(|c| c.has_omega_dot()),
-        has_attitude: first.is_some_and(|c| c.attitude[0].len() == c.len() && !c.is_empty()),
+        has_attitude: first.is_some_and(|c| !c.is_empty() && c.has_attitude()),
     };
     let mut thinned = super::Thinned::new(super::SCREENING_SAMPLES);
     fit_data.iter().for_each(|c| thinned.push(c));

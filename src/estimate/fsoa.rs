@@ -21,6 +21,7 @@ use super::ols::{compressed, term_name};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
 use crate::stats::Accumulator;
+use crate::util::dot;
 
 /// A candidate whose part orthogonal to the chosen terms has norm below this fraction of
 /// its own norm adds nothing the data can distinguish (aliased).
@@ -257,10 +258,6 @@ fn normalised<'a>(v: impl Iterator<Item = &'a f64>) -> Vec<f64> {
     } else {
         v
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn axpy(y: &mut [f64], a: f64, x: &[f64]) {

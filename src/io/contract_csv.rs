@@ -469,10 +469,10 @@ pub fn write_contract_csv<'a>(
                 h += &format!(",omega_dot_{i}");
             }
             h += ",fx,fy,fz,mx,my,mz";
-            if !c.height.is_empty() {
+            if c.has_height() {
                 h += ",height";
             }
-            if !c.attitude[0].is_empty() {
+            if c.has_attitude() {
                 h += ",qw,qx,qy,qz";
             }
             writeln!(out, "{h}")?;
@@ -492,10 +492,10 @@ pub fn write_contract_csv<'a>(
             c.omega.iter().for_each(|v| put(v[k]));
             c.omega_dot.iter().for_each(|v| put(v[k]));
             c.wrench.iter().for_each(|v| put(v[k]));
-            if !c.height.is_empty() {
+            if c.has_height() {
                 put(c.height[k]);
             }
-            if !c.attitude[0].is_empty() {
+            if c.has_attitude() {
                 c.attitude.iter().for_each(|v| put(v[k]));
             }
             writeln!(out, "{line}")?;

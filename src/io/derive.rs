@@ -5,7 +5,7 @@
 
 use serde::Deserialize;
 
-use crate::airframe::cross;
+use crate::util::{cross, quat_to_matrix};
 
 /// Options of the derivations.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -174,28 +174,6 @@ pub fn specific_force_at_cg(
     let tangential = cross(omega_dot, lever);
     let centripetal = cross(omega, cross(omega, lever));
     [0, 1, 2].map(|k| a_imu[k] - tangential[k] - centripetal[k])
-}
-
-/// Rotation matrix of a unit quaternion `[w, x, y, z]` (body → world).
-pub fn quat_to_matrix(q: [f64; 4]) -> [[f64; 3]; 3] {
-    let [w, x, y, z] = q;
-    [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ]
 }
 
 /// Unit quaternion `[w, x, y, z]` with w ≥ 0 of a rotation matrix (Shepperd's method).

@@ -102,10 +102,10 @@ fn json_messages(c: &SampleChunk, k: usize) -> [Vec<u8>; 3] {
     let t = c.t[k];
     let v = |a: &[Vec<f64>; 3]| json!({"x": a[0][k], "y": a[1][k], "z": a[2][k]});
     let mut state = json!({"t": t, "velocity": v(&c.velocity), "rates": v(&c.rates)});
-    if !c.height.is_empty() {
+    if c.has_height() {
         state["height"] = json!(c.height[k]);
     }
-    if !c.attitude[0].is_empty() {
+    if c.has_attitude() {
         let q = &c.attitude;
         state["attitude"] = json!({"w": q[0][k], "x": q[1][k], "y": q[2][k], "z": q[3][k]});
     }
@@ -208,8 +208,8 @@ pub fn write_samples_laid_out<'a>(
             omega_dot: false,
         },
         |c| Shape {
-            height: !c.height.is_empty(),
-            attitude: !c.attitude[0].is_empty(),
+            height: c.has_height(),
+            attitude: c.has_attitude(),
             omega_dot: c.has_omega_dot(),
         },
     );

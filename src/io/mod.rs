@@ -37,8 +37,7 @@ pub use layout::LayoutReport;
 pub use mapping::Mapping;
 
 use derive::{
-    body_velocity, euler_moment, matrix_to_quat, quat_to_matrix, sg_derivative_weights,
-    specific_force_at_cg,
+    body_velocity, euler_moment, matrix_to_quat, sg_derivative_weights, specific_force_at_cg,
 };
 use mapping::{AxisMap, Signal};
 use slots::SlotLayout;
@@ -48,6 +47,7 @@ use validate::{
 
 use crate::CHUNK_SAMPLES;
 use crate::sample::SampleChunk;
+use crate::util::quat_to_matrix;
 use crate::vehicle::Vehicle;
 
 /// Largest rotor count the readers handle.

@@ -45,10 +45,10 @@ impl LogTable {
             columns.push((format!("omega_dot_{}", i + 1), v.clone()));
         }
         let mut table = Self { columns };
-        if !chunk.height.is_empty() {
+        if chunk.has_height() {
             table.push("height", chunk.height.clone());
         }
-        if !chunk.attitude[0].is_empty() {
+        if chunk.has_attitude() {
             for (name, v) in ["qw", "qx", "qy", "qz"].iter().zip(&chunk.attitude) {
                 table.push(name, v.clone());
             }
@@ -103,7 +103,8 @@ impl LogTable {
     /// Writes the CSV to `path` atomically: a temporary file in the same directory,
     /// flushed and renamed over `path`, so a failed run leaves no partial file.
     pub fn write_csv(&self, path: &Path) -> Result<(), String> {
-        write_atomically(path, &self.to_csv_bytes())
+        crate::util::write_atomically(path, &self.to_csv_bytes())
+            .map_err(|e| format!("{}: cannot write: {e}", path.display()))
     }
 }
 
@@ -114,30 +115,4 @@ pub fn round_significant(x: f64) -> f64 {
     }
     let s = format!("{:.*e}", SIGNIFICANT_DIGITS - 1, x);
     s.parse().unwrap_or(x)
-}
-
-/// Writes `bytes` to `path` through a temporary sibling file and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| format!("{}: not a file path", path.display()))?;
-    let tmp = dir.join(format!(
-        ".{}.tmp{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("{}: cannot write: {e}", path.display())
-    })
 }

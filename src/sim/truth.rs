@@ -9,7 +9,7 @@ use serde::Deserialize;
 use super::blade_element::{BladeDescription, BladeElementRotor, BladeOverrides, RotorKinematics};
 use super::effects::{Effects, ground_effect_ratio, vortex_ring_factor, wake_factors};
 use super::inflow::{InflowModel, InflowState};
-use crate::airframe::cross;
+use crate::util::{cross, dot};
 use crate::vehicle::Vehicle;
 
 /// Radial Gauss points of the default quadrature.
@@ -225,7 +225,7 @@ impl TruthModel {
             let mut thrust_factor = wake.get(i).copied().unwrap_or(1.0);
             if let (Some(k), Some(h)) = (self.effects.ground_effect(), x.height) {
                 let down = x.down_row.unwrap_or([0.0, 0.0, 1.0]);
-                let z = h - dot(down, *hub);
+                let z = h - dot(&down, hub);
                 thrust_factor *= ground_effect_ratio(k, radius, z);
             }
             if let Some(k) = self.effects.vortex_ring() {
@@ -284,8 +284,4 @@ fn line_of(text: &str, offset: usize) -> usize {
 
 fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
