@@ -75,7 +75,36 @@ pub struct ModelFileError {
     pub message: String,
 }
 
-/// Vehicle + model structure + estimated parameters.
+/// Vehicle + model structure + estimated parameters (and their covariance when known):
+/// saved, loaded and evaluated by downstream tools.
+///
+/// ```
+/// use mrsysid::{Identification, IdentifiedModel, Sample, Vehicle};
+/// # fn main() -> Result<(), mrsysid::Error> {
+/// let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+/// let vehicle = Vehicle::from_toml_file(&root.join("data/vehicles/quad_x.toml"))?;
+/// let model = Identification::new(vehicle)
+///     .log(root.join("data/quad_x_sweep.csv"))
+///     .diagnose(false)
+///     .run()?
+///     .to_identified_model();
+/// let path = std::env::temp_dir().join(format!("doc-model-{}.toml", std::process::id()));
+/// model.save(&path)?;
+/// let back = IdentifiedModel::load(&path)?;
+/// // 5 m/s forward at hover rotor speeds (rad/s); Ω̇ = 0 for the J_z terms.
+/// let state = Sample {
+///     velocity: [5.0, 0.0, 0.0],
+///     omega: vec![1200.0; 4],
+///     omega_dot: vec![0.0; 4],
+///     ..Sample::default()
+/// };
+/// assert_eq!(back.predict(&state)?, model.predict(&state)?, "TOML keeps f64 exactly");
+/// let sigma = back.prediction_std(&state)?.expect("the covariance is saved");
+/// assert!(sigma.iter().all(|s| s.is_finite() && *s >= 0.0));
+/// # std::fs::remove_file(&path).ok();
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Debug, Clone)]
 pub struct IdentifiedModel {
     /// The vehicle.

@@ -58,7 +58,7 @@ Exit codes: 0 success; 1 the fit failed or the data cannot support it; 2 bad inp
 
 #[derive(Clone, Copy, ValueEnum)]
 enum InflowArg {
-    /// From per-rotor sums (exact for any Assumption 2 layout and spin assignment).
+    /// From per-rotor sums (exact for any planar layout and spin assignment).
     Derived,
     /// The seed's printed case table.
     Paper,

@@ -40,6 +40,12 @@ impl From<&Path> for LogSource {
     }
 }
 
+impl From<&str> for LogSource {
+    fn from(path: &str) -> Self {
+        Self::File(path.into())
+    }
+}
+
 impl From<MemoryLog> for LogSource {
     fn from(log: MemoryLog) -> Self {
         Self::Memory(Arc::new(log))

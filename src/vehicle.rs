@@ -268,6 +268,28 @@ pub struct MassAndRotorProperties {
 
 /// A multirotor with a supported planar layout: one that satisfies Assumption 2 (then
 /// classified per Definition 1) or a general planar layout (see the module docs).
+///
+/// ```
+/// use mrsysid::vehicle::{ConfigurationClass, Vehicle, VehicleSource};
+/// let toml = r#"
+///     name = "5-inch quad"
+///     mass = 1.2                  # kg
+///     inertia = [[0.011, 0, 0], [0, 0.012, 0], [0, 0, 0.021]]   # kg m^2
+///     air_density = 1.225         # kg/m^3
+///     rotor_radius = 0.0635       # m
+///     hub_height = 0.02           # m
+///     rotor_inertia = 3.0e-5      # kg m^2
+///     preset = "quad_x"
+///     arm_length = 0.225          # m
+/// "#;
+/// let v = Vehicle::from_toml_str(toml, VehicleSource::Code).expect("a valid vehicle");
+/// assert_eq!(v.rotor_count(), 4);
+/// assert_eq!(v.class(), ConfigurationClass::QuadX);
+/// assert!((v.arm_length() - 0.225).abs() < 1e-12);
+/// assert!(v.notes().is_empty(), "Assumption 2 holds");
+/// // A malformed file is an error naming the problem, never a panic.
+/// assert!(Vehicle::from_toml_str("mass = -1", VehicleSource::Code).is_err());
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Vehicle {
     /// Human-readable name.
