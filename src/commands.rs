@@ -36,8 +36,10 @@ impl Failure {
     }
 }
 
-impl From<mrsysid::Error> for Failure {
-    fn from(e: mrsysid::Error) -> Self {
+/// Any library error: its message, and the exit code its variant maps to.
+impl<E: Into<mrsysid::Error>> From<E> for Failure {
+    fn from(e: E) -> Self {
+        let e = e.into();
         Self {
             code: e.exit_code(),
             message: e.to_string(),
@@ -74,13 +76,12 @@ fn read_options(drop_invalid: bool) -> ReadOptions {
 }
 
 fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
-    path.map(|p| Mapping::from_toml_file(p).map_err(|e| Failure::input(e.to_string())))
-        .transpose()
+    Ok(path.map(Mapping::from_toml_file).transpose()?)
 }
 
 /// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
 pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
-    let vehicle = Vehicle::from_toml_file(&cmd.vehicle).map_err(mrsysid::Error::from)?;
+    let vehicle = Vehicle::from_toml_file(&cmd.vehicle)?;
     if !cmd.quiet {
         for note in vehicle.notes() {
             eprintln!("note: {}: {note}", cmd.vehicle.display());
@@ -129,10 +130,7 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
             .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
     }
     if let Some(path) = &cmd.model_out {
-        results
-            .to_identified_model()
-            .save(path)
-            .map_err(mrsysid::Error::from)?;
+        results.to_identified_model().save(path)?;
     }
     if let Some(dir) = &cmd.plots {
         write_plots(dir, results.outcome()).map_err(|e| Failure::input(e.to_string()))?;
@@ -336,14 +334,14 @@ pub fn predict(
     mapping: Option<&Path>,
     out: &Path,
 ) -> Result<(), Failure> {
-    let m = IdentifiedModel::load(model).map_err(|e| Failure::input(e.to_string()))?;
+    let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
     let reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
         .map_err(|e| Failure::input(e.to_string()))?;
     let mut text = String::from("t,fx,fy,fz,mx,my,mz\n");
     let mut ws = Workspace::default();
     for chunk in reader {
-        let chunk = chunk.map_err(|e| Failure::input(e.to_string()))?;
+        let chunk = chunk?;
         let y = m
             .predict_chunk(&chunk, &mut ws)
             .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
@@ -366,7 +364,7 @@ pub fn validate(
     mapping: Option<&Path>,
     json: Option<&Path>,
 ) -> Result<(), Failure> {
-    let m = IdentifiedModel::load(model).map_err(|e| Failure::input(e.to_string()))?;
+    let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
     let mut acc = Accumulator::new(&m.structure);
     let mut ws = Workspace::default();
@@ -374,7 +372,7 @@ pub fn validate(
         let reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
             .map_err(|e| Failure::input(e.to_string()))?;
         for chunk in reader {
-            let chunk = chunk.map_err(|e| Failure::input(e.to_string()))?;
+            let chunk = chunk?;
             acc.push(&m.structure, &chunk, &mut ws)
                 .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
         }
@@ -382,8 +380,7 @@ pub fn validate(
     if acc.count() == 0 {
         return Err(Failure::fit("no samples in the validation logs".into()));
     }
-    let metrics = estimate::evaluate(&m.structure, &m.theta(), &acc)
-        .map_err(|e| Failure::fit(e.to_string()))?;
+    let metrics = estimate::evaluate(&m.structure, &m.theta(), &acc)?;
     let rows: Vec<AxisRow> = metrics.iter().map(AxisRow::from).collect();
     println!("{} samples; model {}", acc.count(), model.display());
     println!(
@@ -415,7 +412,7 @@ pub fn validate(
 /// parameters, to `out` or stdout; the notes (what to fill in, the layout check) go to
 /// stderr.
 pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> {
-    let defs = io::ulog::read_definitions(log).map_err(|e| Failure::input(e.to_string()))?;
+    let defs = io::ulog::read_definitions(log)?;
     let file = io::error::display_name(log);
     let rotors = io::px4::rotors_from_parameters(&defs.parameters)
         .map_err(|m| Failure::input(format!("{file}: {m}")))?;

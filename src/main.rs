@@ -56,24 +56,6 @@ const FIT_EXAMPLES: &str = "Examples:
 
 Exit codes: 0 success; 1 the fit failed or the data cannot support it; 2 bad input or usage.";
 
-#[derive(Clone, Copy, ValueEnum)]
-enum InflowArg {
-    /// From per-rotor sums (exact for any planar layout and spin assignment).
-    Derived,
-    /// The seed's printed case table.
-    Paper,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum RotorInertiaArg {
-    /// J_z from the vehicle file, terms moved to the output side.
-    Known,
-    /// Estimate J_z as a parameter.
-    Estimated,
-    /// Leave the J_z terms out.
-    Neglected,
-}
-
 #[derive(clap::Args)]
 struct ModelArgs {
     /// Vehicle TOML file.
@@ -83,14 +65,14 @@ struct ModelArgs {
     #[arg(long)]
     mapping: Option<PathBuf>,
     /// Inflow-correction terms of Eq. 22.
-    #[arg(long, value_enum, default_value_t = InflowArg::Derived)]
-    inflow: InflowArg,
+    #[arg(long, value_enum, default_value_t = InflowCorrection::Derived)]
+    inflow: InflowCorrection,
     /// Leave out the terms linear in V_h (the seed's simulation-study variant).
     #[arg(long)]
     no_linear_vh: bool,
     /// Treatment of the J_z gyroscopic and motor-torque terms.
-    #[arg(long, value_enum, default_value_t = RotorInertiaArg::Known)]
-    rotor_inertia: RotorInertiaArg,
+    #[arg(long, value_enum, default_value_t = RotorInertiaTerms::Known)]
+    rotor_inertia: RotorInertiaTerms,
     /// Drop invalid samples (NaN, out of range, time going back) and count them,
     /// instead of stopping at the first.
     #[arg(long)]
@@ -296,16 +278,9 @@ impl FitArgs {
             vehicle: m.vehicle.clone(),
             mapping: m.mapping.clone(),
             options: ModelOptions {
-                inflow: match m.inflow {
-                    InflowArg::Derived => InflowCorrection::Derived,
-                    InflowArg::Paper => InflowCorrection::Paper,
-                },
+                inflow: m.inflow,
                 linear_vh_terms: !m.no_linear_vh,
-                rotor_inertia: match m.rotor_inertia {
-                    RotorInertiaArg::Known => RotorInertiaTerms::Known,
-                    RotorInertiaArg::Estimated => RotorInertiaTerms::Estimated,
-                    RotorInertiaArg::Neglected => RotorInertiaTerms::Neglected,
-                },
+                rotor_inertia: m.rotor_inertia,
             },
             drop_invalid: m.drop_invalid,
             validate: self.validate.clone(),

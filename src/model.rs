@@ -208,6 +208,7 @@ pub struct Parameter {
 
 /// How the inflow-correction terms are built.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum InflowCorrection {
     /// From per-rotor sums over the vehicle's positions and spins (exact for any
@@ -215,12 +216,13 @@ pub enum InflowCorrection {
     #[default]
     Derived,
     /// The printed case table of Eq. 22, to reproduce the seed (Definition 1 classes
-    /// only: a general planar layout uses [`InflowCorrection::Derived`]).
+    /// only: a general planar layout always uses the derived form).
     Paper,
 }
 
 /// Treatment of the J_z gyroscopic and motor-torque terms (Eq. 16).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum RotorInertiaTerms {
     /// J_z from the vehicle file; the terms are subtracted from the measured moments.

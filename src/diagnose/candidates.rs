@@ -134,6 +134,8 @@ pub struct CandidateContext<'a> {
 }
 
 impl CandidateContext<'_> {
+    /// The base estimate of parameter `name`; 0 when the structure lacks it (a variant
+    /// without that term, e.g. no linear V_h terms: its contribution is then zero).
     fn theta(&self, name: &str) -> f64 {
         self.structure
             .param_index(name)

@@ -746,10 +746,12 @@ fn score(
     (s, c, Some(t))
 }
 
-/// The whole procedure on in-memory data: fits `base` on `fit_data`, builds the
+/// The procedure alone on in-memory data: fits `base` on `fit_data`, builds the
 /// candidates from its estimates, accumulates them over both parts and runs
-/// [`diagnose`] with `validation_data` as the one cross-validation fold. (The `fit`
-/// pipeline does the same while streaming files.)
+/// [`diagnose`] with `validation_data` as the one cross-validation fold (for sweeps,
+/// whose points are independent, so any split is a fair hold-out). Unlike
+/// [`crate::Identification`] it applies only `options.variance_inflation` (no residual
+/// pass estimates the coloured-residual correction): use the builder for flight logs.
 pub fn diagnose_chunks(
     vehicle: &crate::vehicle::Vehicle,
     base: &ModelStructure,
