@@ -150,16 +150,20 @@ mod tests {
     use super::*;
     use crate::vehicle::{MassAndRotorProperties, Preset};
 
-    #[test]
-    fn quad_x_mixing_matches_eq_20_by_hand() {
-        let props = MassAndRotorProperties {
+    fn props() -> MassAndRotorProperties {
+        MassAndRotorProperties {
             mass: 1.0,
             inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
             air_density: 1.225,
             rotor_radius: 0.1,
             hub_height: 0.0,
             rotor_inertia: 0.0,
-        };
+        }
+    }
+
+    #[test]
+    fn quad_x_mixing_matches_eq_20_by_hand() {
+        let props = props();
         let v = Vehicle::preset("q", Preset::QuadX, 2f64.sqrt(), 1.0, props).unwrap();
         // Rotors at (±1, ±1) m: 1 FR(+), 2 RR(−), 3 RL(+), 4 FL(−) (azimuth order).
         let m = Mixing::new(&v);
@@ -197,14 +201,7 @@ mod tests {
                 spin,
             })
             .collect();
-        let props = MassAndRotorProperties {
-            mass: 1.0,
-            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
-            air_density: 1.225,
-            rotor_radius: 0.1,
-            hub_height: 0.0,
-            rotor_inertia: 0.0,
-        };
+        let props = props();
         let v = Vehicle::from_rotors("asym", props, rotors).unwrap();
         let m = Mixing::new(&v);
         // Equal speeds: δt = Ω, δa = 0, δe = Ω Σx_i, δr = 0 (to rounding).

@@ -160,7 +160,17 @@ fn malformed_chunks_are_refused_everywhere_they_enter() {
         ..Sample::default()
     };
     assert!(model.predict(&three).is_err());
-    assert!(model.prediction_std(&three).is_ok_and(|s| s.is_none()));
+    let n = structure.params.len();
+    let with_cov = model
+        .clone()
+        .with_covariance(nalgebra::DMatrix::identity(n, n));
+    assert!(matches!(
+        with_cov.prediction_std(&three),
+        Err(ModelError::RotorCountMismatch {
+            expected: 4,
+            found: 3
+        })
+    ));
     // State without the rotor accelerations the J_z terms need.
     let no_dot = Sample {
         omega: vec![500.0; 4],
