@@ -203,6 +203,10 @@ struct SimulateArgs {
     /// Flight: omit the true force/moment columns (IMU-only log).
     #[arg(long)]
     imu_only: bool,
+    /// Flight: seconds flown low at the start (rotor plane 1–4 diameters above the
+    /// ground), then the usual altitude.
+    #[arg(long, default_value_t = 0.0)]
+    near_ground: f64,
 }
 
 fn parse_effect(s: &str) -> Result<Effect, String> {
@@ -229,6 +233,7 @@ impl SimulateArgs {
                 step: self.step,
                 log_rate: self.log_rate,
                 imu_only: self.imu_only,
+                near_ground: self.near_ground,
                 ..FlightConfig::default()
             }),
         };

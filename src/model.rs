@@ -135,11 +135,20 @@ pub enum Signal {
     /// rotor-plane height above ground (Cheeseman–Bennett: T_IGE = T (1 + g)); z_r is
     /// held at ≥ R/2 (s ≤ 1/4). Dimensionless; needs the `height` signal.
     GroundEffect,
+    /// Ground-effect factor g of rotor `i` (0-based) at its own rotor-plane height: the
+    /// CG height less the down (NED) component of the hub's offset (x_i, y_i, −h), so a
+    /// tilted vehicle's low rotors feel more of the ground; as [`Signal::GroundEffect`]
+    /// otherwise. Dimensionless; needs the `height` and attitude signals.
+    RotorGroundEffect(u8),
     /// Wake immersion of rotor `i` (0-based) in forward flight, dimensionless in [0, 1]:
     /// the summed overlap (1 − miss/2R, ≥ 0) of the rotor with the wakes of rotors
     /// upstream of it along the in-plane airflow, capped at 1, times the wake strength
     /// V_h²/(V_h² + ν0²).
     WakeImmersion(u8),
+    /// Wake overlap of rotor `i` (0-based) as in [`Signal::WakeImmersion`], times its
+    /// advance ratio μ_i = V_h/(Ω_i R) instead of the wake strength: a loss that keeps
+    /// growing with speed. Dimensionless (0 at Ω_i = 0).
+    WakeAdvance(u8),
     /// Vortex-ring-state onset of rotor `i` (0-based), dimensionless in [0, 1]:
     /// exp(−((w_i/ν0 − 1)/0.5)²) exp(−(V_h/ν0)²), w_i = w + p y_i − q x_i the hub's
     /// descent speed (Eq. 18): a bump centred on descent at the hover inflow speed, the
@@ -588,13 +597,19 @@ impl ModelStructure {
         if self.needs_omega_dot() && !chunk.has_omega_dot() {
             return Err(ModelError::MissingRotorAcceleration);
         }
-        if self.required.contains(&Signal::GroundEffect) && chunk.height.len() != chunk.len() {
-            return Err(ModelError::MissingHeight);
-        }
-        let needs_attitude = self
+        let per_rotor_ground = self
             .required
             .iter()
-            .any(|s| matches!(s, Signal::NedToBody(_)));
+            .any(|s| matches!(s, Signal::RotorGroundEffect(_)));
+        let needs_height = per_rotor_ground || self.required.contains(&Signal::GroundEffect);
+        if needs_height && chunk.height.len() != chunk.len() {
+            return Err(ModelError::MissingHeight);
+        }
+        let needs_attitude = per_rotor_ground
+            || self
+                .required
+                .iter()
+                .any(|s| matches!(s, Signal::NedToBody(_)));
         if needs_attitude && chunk.attitude[0].len() != chunk.len() {
             return Err(ModelError::MissingAttitude);
         }
@@ -724,17 +739,40 @@ impl ModelStructure {
                     .zip(src)
                     .for_each(|(d, z)| *d = ground_effect_factor(r, z + h));
             }
+            RotorGroundEffect(i) => {
+                let [x, y] = self.hubs[usize::from(i)];
+                let (r, h) = (self.rotor_radius, self.hub_height);
+                let q = &chunk.attitude;
+                for (k, d) in dst.iter_mut().enumerate() {
+                    let quat = [q[0][k], q[1][k], q[2][k], q[3][k]];
+                    let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
+                    // Third row of body→NED: the down component of a body vector.
+                    let down = crate::util::quat_to_matrix(quat.map(|c| c / norm))[2];
+                    let hub_down = down[0] * x + down[1] * y - down[2] * h;
+                    *d = ground_effect_factor(r, chunk.height[k] - hub_down);
+                }
+            }
             WakeImmersion(i) => {
                 let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
+                let (r, nu0) = (self.rotor_radius, self.nu0);
                 for (k, d) in dst.iter_mut().enumerate() {
-                    *d = wake_immersion(
-                        &self.hubs,
-                        usize::from(i),
-                        self.rotor_radius,
-                        self.nu0,
-                        u[k],
-                        v[k],
-                    );
+                    let vh2 = u[k] * u[k] + v[k] * v[k];
+                    let strength = vh2 / (vh2 + nu0 * nu0);
+                    *d = wake_overlap(&self.hubs, usize::from(i), r, u[k], v[k]) * strength;
+                }
+            }
+            WakeAdvance(i) => {
+                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
+                let omega = &chunk.omega[usize::from(i)][..n];
+                let r = self.rotor_radius;
+                for (k, d) in dst.iter_mut().enumerate() {
+                    let vh = u[k].hypot(v[k]);
+                    let mu = if omega[k] > 0.0 {
+                        vh / (omega[k] * r)
+                    } else {
+                        0.0
+                    };
+                    *d = wake_overlap(&self.hubs, usize::from(i), r, u[k], v[k]) * mu;
                 }
             }
             UOverVh | VOverVh => {
@@ -1272,14 +1310,13 @@ pub fn ground_effect_factor(rotor_radius: f64, rotor_height: f64) -> f64 {
     s / (1.0 - s)
 }
 
-/// Wake immersion of rotor `i` at in-plane velocity (u, v) (see
-/// [`Signal::WakeImmersion`]).
-fn wake_immersion(hubs: &[[f64; 2]], i: usize, radius: f64, nu0: f64, u: f64, v: f64) -> f64 {
-    let vh2 = u * u + v * v;
-    if vh2 == 0.0 {
+/// Overlap of rotor `i` with the wakes of the rotors upstream of it at in-plane
+/// velocity (u, v), capped at 1 (see [`Signal::WakeImmersion`]).
+fn wake_overlap(hubs: &[[f64; 2]], i: usize, radius: f64, u: f64, v: f64) -> f64 {
+    let vh = u.hypot(v);
+    if vh == 0.0 {
         return 0.0;
     }
-    let vh = vh2.sqrt();
     // Unit vector of the airflow relative to the vehicle (downstream).
     let e = [-u / vh, -v / vh];
     let hi = hubs[i];
@@ -1298,7 +1335,7 @@ fn wake_immersion(hubs: &[[f64; 2]], i: usize, radius: f64, nu0: f64, u: f64, v:
             }
         })
         .sum();
-    overlap.min(1.0) * vh2 / (vh2 + nu0 * nu0)
+    overlap.min(1.0)
 }
 
 /// Vortex-ring onset at hub descent speed `descent` (m/s, down +) and in-plane airspeed

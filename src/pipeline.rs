@@ -13,6 +13,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use crate::CHUNK_SAMPLES;
+use crate::diagnose::local::{LocalFolds, LocalRegions};
 use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
     SCREENING_SAMPLES, Thinned, candidate_set, diagnose,
@@ -613,6 +614,7 @@ struct Extended {
     structure: ModelStructure,
     candidates: Vec<Candidate>,
     params: Vec<Vec<usize>>,
+    regions: LocalRegions,
 }
 
 impl Extended {
@@ -638,6 +640,7 @@ impl Extended {
             structure: set.extended,
             candidates: set.candidates,
             params: set.params,
+            regions: set.regions,
         })
     }
 }
@@ -665,6 +668,8 @@ struct LogPass {
     span: [(f64, f64); 2],
     /// Candidate-effect statistics (fitted, held-out samples), when diagnosing.
     candidates: Option<[Accumulator; 2]>,
+    /// The same over the samples where each local candidate acts, one per region.
+    local: [Vec<Accumulator>; 2],
 }
 
 /// Streams the data again: residual diagnostics of the fit samples, decimated series of
@@ -700,7 +705,7 @@ fn second_pass(
             Some(start)
         })
         .collect();
-    let shares = run_jobs(jobs, req, |i, path, role, overlap| {
+    let mut shares = run_jobs(jobs, req, |i, path, role, overlap| {
         pass_log(&ctx, path, role, overlap, starts[i])
     })?;
     let mut residuals: Option<ResidualPass> = None;
@@ -727,6 +732,11 @@ fn second_pass(
     let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
         return Ok(());
     };
+    let local_parts: Vec<[Vec<Accumulator>; 2]> = shares
+        .iter_mut()
+        .take(req.logs.len())
+        .map(|s| std::mem::take(&mut s.local))
+        .collect();
     let per_log: Vec<[Accumulator; 2]> = shares.into_iter().filter_map(|s| s.candidates).collect();
     let n_fit = req.logs.len();
     if per_log.len() != jobs.len() {
@@ -738,6 +748,7 @@ fn second_pass(
     for [_, held_out] in &per_log[n_fit..] {
         merge(&mut report, held_out)?;
     }
+    let local = local_folds(&ext.regions, &local_parts, &folds)?;
     options.variance_inflation = options.variance_inflation.max(inflation);
     let stats = CandidateStatistics {
         extended: &ext.structure,
@@ -747,9 +758,37 @@ fn second_pass(
         fit: &fit,
         folds: &folds,
         report: (report.count() > 0).then_some(&report),
+        local: &local,
     };
     out.diagnosis = Some(diagnose(&stats, &req.fit, &options)?);
     Ok(())
+}
+
+/// The held-out statistics where each local candidate acts, per fold as [`arrange`]
+/// builds the folds: the hold-out part of a single log, or each whole log left out.
+/// A region with no active held-out sample in some fold is left out (judged globally).
+fn local_folds(
+    regions: &LocalRegions,
+    parts: &[[Vec<Accumulator>; 2]],
+    folds: &Folds,
+) -> Result<Vec<LocalFolds>, Error> {
+    let mut out = Vec::new();
+    for (r, &candidate) in regions.candidates.iter().enumerate() {
+        let tests = if let [single] = parts {
+            vec![single[1][r].clone()]
+        } else {
+            parts
+                .iter()
+                .map(|log| {
+                    let mut a = log[0][r].clone();
+                    merge(&mut a, &log[1][r])?;
+                    Ok(a)
+                })
+                .collect::<Result<Vec<_>, Error>>()?
+        };
+        out.extend(LocalFolds::new(candidate, folds, tests));
+    }
+    Ok(out)
 }
 
 /// Appends a log's plot series after the logs before it on the plots' time axis
@@ -794,6 +833,11 @@ fn pass_log(
                 Accumulator::new(&e.structure),
             ]
         }),
+        local: [0, 1].map(|_| {
+            ctx.extended
+                .as_ref()
+                .map_or_else(Vec::new, |e| e.regions.accumulators(&e.structure))
+        }),
     };
     let mut ws = Workspace::default();
     let mut split = Splitter::new(role);
@@ -802,6 +846,9 @@ fn pass_log(
         if let (Some(ext), Some(acc)) = (&ctx.extended, share.candidates.as_mut()) {
             acc[k]
                 .push(&ext.structure, part, &mut ws)
+                .map_err(accumulate_error(source))?;
+            ext.regions
+                .push(&ext.structure, part, &mut share.local[k], &mut ws)
                 .map_err(accumulate_error(source))?;
         }
         // Leaves the base regressors of `part` in `ws` for the plotted predictions.

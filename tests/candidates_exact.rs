@@ -7,7 +7,7 @@ mod closed_form_common;
 
 use closed_form_common::{BLADE, vehicle};
 use mrsysid::airframe::closed_form_wrench;
-use mrsysid::diagnose::{CandidateContext, EffectKind, library};
+use mrsysid::diagnose::{Candidate, CandidateContext, EffectKind, library};
 use mrsysid::model::{ModelOptions, ModelStructure};
 use mrsysid::sample::Sample;
 use mrsysid::util::cross;
@@ -91,6 +91,16 @@ fn check(
     values: &[f64],
     truth: impl Fn(&Sample, [f64; 6]) -> [f64; 6],
 ) -> f64 {
+    check_candidate(v, |c| c.kind == kind, values, truth)
+}
+
+/// As [`check`] for the first candidate `pick` accepts.
+fn check_candidate(
+    v: &Vehicle,
+    pick: impl Fn(&Candidate) -> bool,
+    values: &[f64],
+    truth: impl Fn(&Sample, [f64; 6]) -> [f64; 6],
+) -> f64 {
     let base = ModelStructure::eq22(v, ModelOptions::default());
     let lumped = BLADE.lumped_parameters(v.props.rotor_radius);
     let theta: Vec<f64> = base
@@ -108,7 +118,7 @@ fn check(
     };
     let cand = library(&ctx)
         .into_iter()
-        .find(|c| c.kind == kind)
+        .find(|c| pick(c))
         .expect("candidate present");
     let mut extended = base.clone();
     let idx = cand.add_to(&mut extended);
@@ -127,7 +137,7 @@ fn check(
             size = size.max((t[a] - b[a]).abs());
         }
     }
-    assert!(size > 0.0, "{kind:?}: the effect changes nothing");
+    assert!(size > 0.0, "{}: the effect changes nothing", cand.name);
     err / size
 }
 
@@ -156,6 +166,36 @@ fn ground_effect_columns_are_exact() {
         with_thrust_change(&v, b, &d)
     });
     assert!(e < 1e-9, "{e:e}");
+}
+
+#[test]
+fn per_rotor_ground_effect_columns_are_exact() {
+    // Each rotor at its own height: the CG height less the down component (NED) of the
+    // hub's body offset (x_i, y_i, −h) under the sample's attitude, for random tilts.
+    for preset in [Preset::QuadX, Preset::HexaPlus] {
+        let v = vehicle(preset);
+        let (r, h) = (v.props.rotor_radius, v.props.hub_height);
+        let e = check_candidate(
+            &v,
+            |c| c.name == "ground effect, per-rotor height",
+            &[1.0],
+            |s, b| {
+                let body_to_ned = quat_to_matrix(s.attitude.unwrap());
+                let d: Vec<f64> = rotor_thrusts(&v, s)
+                    .iter()
+                    .zip(v.rotors())
+                    .map(|(t, rotor)| {
+                        let hub = [rotor.x, rotor.y, -h];
+                        let down: f64 = (0..3).map(|k| body_to_ned[2][k] * hub[k]).sum();
+                        let z = s.height.unwrap() - down;
+                        mrsysid::model::ground_effect_factor(r, z) * t
+                    })
+                    .collect();
+                with_thrust_change(&v, b, &d)
+            },
+        );
+        assert!(e < 1e-9, "{preset:?}: {e:e}");
+    }
 }
 
 #[test]

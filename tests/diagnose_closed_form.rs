@@ -106,6 +106,7 @@ fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::diagnose::Diag
         fit: &fa,
         folds: &folds,
         report: None,
+        local: &[],
     };
     diagnose(&stats, &FitOptions::default(), &options).unwrap()
 }

@@ -11,6 +11,8 @@ use crate::model::{Column, ModelStructure, Signal, Term, term};
 use crate::sample::Axis;
 use crate::vehicle::Vehicle;
 
+use super::local::Activity;
+
 /// Which physical effect a candidate stands for (look-alikes are compared by kind).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum EffectKind {
@@ -77,6 +79,11 @@ impl EffectKind {
     pub fn is_unspecific(self) -> bool {
         matches!(self, Self::Generic | Self::DecoupledMoments)
     }
+
+    /// True for an effect offered in several forms of which one enters a model.
+    pub fn is_family_of_forms(self) -> bool {
+        matches!(self, Self::GroundEffect | Self::WakeInteraction)
+    }
 }
 
 /// One parameter of a candidate with the columns it multiplies.
@@ -101,6 +108,9 @@ pub struct Candidate {
     pub physics: &'static str,
     /// Parameters and their columns.
     pub parameters: Vec<CandidateParameter>,
+    /// Where it acts, for an effect confined to part of the envelope (judged on the
+    /// held-out samples there); `None` for an effect that acts everywhere.
+    pub activity: Option<Activity>,
 }
 
 impl Candidate {
@@ -326,35 +336,22 @@ pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
     let n = ctx.vehicle.rotor_count();
     let all: Vec<usize> = (0..n).collect();
     if ctx.has_height {
-        out.push(Candidate {
-            kind: EffectKind::GroundEffect,
-            name: "ground effect".into(),
-            physics: "Near the ground the wake is blocked and thrust rises as 1/(1 - (R/4z)^2) (Cheeseman-Bennett), z the rotor height.",
-            parameters: vec![parameter(
-                "ground_effect_scale",
-                "-",
-                ctx.thrust_change("g_IGE*T_i", &all, |_| vec![Signal::GroundEffect], 1.0),
-            )],
-        });
+        out.extend(ground_effect(ctx));
     }
     for i in 0..n {
         out.push(weak_rotor(ctx, i));
     }
     out.push(cg_offset(ctx));
     out.push(cg_height(ctx));
-    out.push(Candidate {
-        kind: EffectKind::WakeInteraction,
-        name: "rotor-wake interaction".into(),
-        physics: "In forward flight rotors downstream fly in the wakes of rotors upstream and lose thrust, more so as the wake is swept back.",
-        parameters: vec![parameter(
-            "wake_thrust_loss",
-            "-",
-            ctx.thrust_change("-wake_i*T_i", &all, |i| vec![Signal::WakeImmersion(i as u8)], -1.0),
-        )],
-    });
+    out.extend(wake_interaction(ctx));
     out.push(quadratic_drag(ctx));
     out.push(Candidate {
         kind: EffectKind::VortexRing,
+        // A tenth of the full onset or more, summed over rotors.
+        activity: Some(Activity {
+            terms: (0..n).map(|i| term(1.0, &[Signal::VortexRing(i as u8)])).collect(),
+            threshold: 0.1,
+        }),
         name: "vortex-ring state".into(),
         physics: "Descending near the hover inflow speed, a rotor re-ingests its own wake and loses thrust unsteadily; forward speed clears it.",
         parameters: vec![parameter(
@@ -386,6 +383,90 @@ pub fn library(ctx: &CandidateContext) -> Vec<Candidate> {
     out
 }
 
+/// The ground-effect family (Cheeseman–Bennett, T_IGE = T/(1 − k (R/4z)²)) in two
+/// forms: every rotor at the CG's rotor-plane height (level flight, or no attitude
+/// logged), and each rotor at its own height from the attitude (a tilted vehicle's low
+/// rotors feel more of the ground, which also loads roll and pitch). The data choose the
+/// form; one of them enters a model.
+fn ground_effect(ctx: &CandidateContext) -> Vec<Candidate> {
+    let n = ctx.vehicle.rotor_count();
+    let all: Vec<usize> = (0..n).collect();
+    let physics = "Near the ground the wake is blocked and thrust rises as 1/(1 - k (R/4z)^2) (Cheeseman-Bennett), z the rotor height.";
+    // Thrust 1 % or more above its value out of ground effect (rotors within ~1.2
+    // diameters of the ground), on average over the rotors.
+    let uniform = |_: usize| vec![Signal::GroundEffect];
+    let per_rotor = |i: usize| vec![Signal::RotorGroundEffect(i as u8)];
+    let form =
+        |name: &str, param: &str, label: &str, signal: &dyn Fn(usize) -> Vec<Signal>| Candidate {
+            kind: EffectKind::GroundEffect,
+            activity: Some(Activity {
+                terms: (0..n).map(|i| term(1.0 / n as f64, &signal(i))).collect(),
+                threshold: 0.01,
+            }),
+            name: name.into(),
+            physics,
+            parameters: vec![parameter(
+                param,
+                "-",
+                ctx.thrust_change(label, &all, signal, 1.0),
+            )],
+        };
+    let mut out = vec![form(
+        "ground effect",
+        "ground_effect_scale",
+        "g_IGE*T_i",
+        &uniform,
+    )];
+    if ctx.has_attitude {
+        out.push(form(
+            "ground effect, per-rotor height",
+            "ground_effect_scale_per_rotor",
+            "g_IGE,i*T_i",
+            &per_rotor,
+        ));
+    }
+    out
+}
+
+/// The rotor-wake family: rotors downstream in the wakes of rotors upstream lose the
+/// fraction θ f_i of their thrust, f_i their wake overlap (capped at 1) times the
+/// overlap-area form's wake strength V_h²/(V_h² + ν0²) (saturating with speed), or the
+/// advance-ratio form's μ_i = V_h/(Ω_i R) (growing with speed). The data choose the
+/// form; one of them enters a model.
+fn wake_interaction(ctx: &CandidateContext) -> Vec<Candidate> {
+    let n = ctx.vehicle.rotor_count();
+    let all: Vec<usize> = (0..n).collect();
+    let form = |name: &str, param: &str, label: &str, signal: fn(u8) -> Signal| Candidate {
+        kind: EffectKind::WakeInteraction,
+        // A tenth of a rotor's thrust or more at θ = 1, summed over rotors.
+        activity: Some(Activity {
+            terms: (0..n).map(|i| term(1.0, &[signal(i as u8)])).collect(),
+            threshold: 0.1,
+        }),
+        name: name.into(),
+        physics: "In forward flight rotors downstream fly in the wakes of rotors upstream and lose thrust, more so as the wake is swept back.",
+        parameters: vec![parameter(
+            param,
+            "-",
+            ctx.thrust_change(label, &all, |i| vec![signal(i as u8)], -1.0),
+        )],
+    };
+    vec![
+        form(
+            "rotor-wake interaction",
+            "wake_thrust_loss",
+            "-wake_i*T_i",
+            Signal::WakeImmersion,
+        ),
+        form(
+            "rotor-wake interaction, advance ratio",
+            "wake_thrust_loss_advance",
+            "-overlap_i*mu_i*T_i",
+            Signal::WakeAdvance,
+        ),
+    ]
+}
+
 /// Forces derived as F = m a from an accelerometer with a constant bias b carry m b.
 /// Only the in-plane components: a constant on F_z cannot be told from the thrust
 /// terms (δt² and ν0 δt are nearly constant near hover), while Eq. 22's in-plane forces
@@ -397,6 +478,7 @@ fn accelerometer_bias(ctx: &CandidateContext) -> Candidate {
     };
     Candidate {
         kind: EffectKind::AccelerometerBias,
+        activity: None,
         name: "accelerometer bias".into(),
         physics: "Forces derived as m a from an accelerometer with a constant bias b (or logged with a constant offset) carry m b on every sample.",
         parameters: vec![
@@ -423,6 +505,7 @@ fn weak_rotor(ctx: &CandidateContext, i: usize) -> Candidate {
     }
     Candidate {
         kind: EffectKind::RotorAsymmetry,
+        activity: None,
         name: format!("weak rotor {}", i + 1),
         physics: "A damaged propeller or tired motor makes one rotor's thrust and torque a fraction off the others' at the same logged speed.",
         parameters,
@@ -441,6 +524,7 @@ fn cg_offset(ctx: &CandidateContext) -> Candidate {
     ];
     Candidate {
         kind: EffectKind::CgOffset,
+        activity: None,
         name: "CG offset".into(),
         physics: "With the CG at (dx, dy) from the reference point, the thrust acts on a lever arm: M gains F x d.",
         parameters: vec![
@@ -465,6 +549,7 @@ fn cg_height(ctx: &CandidateContext) -> Candidate {
     ];
     Candidate {
         kind: EffectKind::CgHeight,
+        activity: None,
         name: "in-plane force lever arm".into(),
         physics: "In-plane forces act dz below the height Eq. 22 assumes (the hubs): the CG is not where assumed, or airframe drag, which Assumption 3 lumps into the rotors, acts nearer the CG.",
         parameters: vec![parameter(
@@ -491,6 +576,7 @@ fn quadratic_drag(ctx: &CandidateContext) -> Candidate {
     };
     Candidate {
         kind: EffectKind::QuadraticDrag,
+        activity: None,
         name: "quadratic airframe drag".into(),
         physics: "The airframe's pressure drag grows with the square of airspeed, -rho/2 CdA v|v| per axis, beyond the linear drag Eq. 22 lumps into the rotors.",
         parameters: vec![
@@ -534,6 +620,7 @@ fn steady_wind(ctx: &CandidateContext) -> Candidate {
         .collect();
     Candidate {
         kind: EffectKind::SteadyWind,
+        activity: None,
         name: "steady wind".into(),
         physics: "A steady wind makes the airspeed differ from the logged (ground-relative) velocity by the wind rotated into body axes, which changes the rotor loads through their velocity dependence.",
         parameters,
@@ -572,6 +659,7 @@ fn linear_vh(ctx: &CandidateContext) -> Candidate {
         .collect();
     Candidate {
         kind: EffectKind::LinearVh,
+        activity: None,
         name: "terms linear in Vh".into(),
         physics: "The inflow varies with in-plane airspeed (Eq. 6, C_nu_mu); a constant-inflow model leaves out the terms linear in Vh.",
         parameters,
@@ -609,6 +697,7 @@ fn delay(ctx: &CandidateContext) -> Candidate {
     ];
     Candidate {
         kind: EffectKind::RotorSpeedDelay,
+        activity: None,
         name: "rotor-speed delay".into(),
         physics: "When logged rotor speeds lag the true ones by tau (a pure delay, or a first-order filter of time constant tau: the two agree to first order in tau), the loads lead the log: dF = tau dF/dOmega dOmega/dt.",
         parameters: vec![parameter(
@@ -633,6 +722,7 @@ fn yaw_rate_drag(ctx: &CandidateContext) -> Candidate {
     let nu0 = ctx.vehicle.hover_induced_velocity();
     Candidate {
         kind: EffectKind::YawRateDrag,
+        activity: None,
         name: "yaw-rate rotor drag".into(),
         physics: "Yawing moves each hub sideways (r x r_i); the rotors' H-force on that velocity damps yaw and couples yaw rate into Fx and Fy.",
         parameters: vec![
@@ -700,6 +790,7 @@ fn roll_pitch_rate_drag(ctx: &CandidateContext) -> Candidate {
     };
     Candidate {
         kind: EffectKind::RollPitchRateDrag,
+        activity: None,
         name: "roll/pitch-rate rotor drag".into(),
         physics: "Rolling and pitching move the hubs, which sit h above the CG, sideways at p h and q h; the rotors' H-force on that velocity couples the rates into Fx and Fy and damps roll and pitch through the same lever arm.",
         parameters: vec![
@@ -737,6 +828,7 @@ fn decoupled_moments(ctx: &CandidateContext) -> Vec<Candidate> {
             }
             out.push(Candidate {
                 kind: EffectKind::DecoupledMoments,
+                activity: None,
                 name: format!("decoupled {name} on {axis}"),
                 physics: "Eq. 22 ties this coefficient's moment terms to its force terms through the vehicle file's lever arms; wrong arms, thrust and drag centres away from the hubs, or moment physics the model lacks that follows the same term give the moment a value of its own.",
                 parameters: vec![parameter(
@@ -784,6 +876,7 @@ fn rotor_flapping(ctx: &CandidateContext) -> Candidate {
     };
     Candidate {
         kind: EffectKind::RotorFlapping,
+        activity: None,
         name: "rotor flapping moment".into(),
         physics: "Each rotor's disc flaps back from the in-plane airflow at its hub (angle proportional to the advance ratio), tilting its thrust and loading a stiff hub: a rolling moment against the hub's sideways speed and a pitching moment against its forward speed, proportional to rotor speed times hub speed.",
         parameters: vec![parameter(
@@ -805,6 +898,7 @@ fn rotor_rate_damping() -> Candidate {
     use Signal::*;
     Candidate {
         kind: EffectKind::RotorRateDamping,
+        activity: None,
         name: "rotor rate damping".into(),
         physics: "Rolling and pitching move each hub up or down (w_i = p y_i - q x_i), changing its rotor's angle of attack and thrust in proportion to rotor speed: a damping moment, here with its own coefficient instead of the one Eq. 22 shares with the vertical force.",
         parameters: vec![parameter(
@@ -840,6 +934,7 @@ fn rotor_acceleration_thrust(ctx: &CandidateContext) -> Candidate {
     };
     Candidate {
         kind: EffectKind::RotorAccelerationThrust,
+        activity: None,
         name: "thrust from rotor acceleration".into(),
         physics: "When a rotor speeds up, its thrust changes in proportion to the rotor acceleration as well as the speed: the induced flow takes time to build (dynamic inflow), or the logged speed lags the true one through a filter.",
         parameters: vec![parameter(

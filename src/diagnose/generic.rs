@@ -297,6 +297,7 @@ impl Screened {
         let name = format!("generic {} {}", self.axis, self.label);
         Candidate {
             kind: EffectKind::Generic,
+            activity: None,
             name: name.clone(),
             physics: "Residual structure no named effect explains: a product of states, virtual actuators and rotor-local sums, estimated as the load at one RMS of the product.",
             parameters: vec![CandidateParameter {

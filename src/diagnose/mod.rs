@@ -4,6 +4,7 @@
 
 pub mod candidates;
 pub mod generic;
+pub mod local;
 pub mod procedure;
 
 pub use candidates::{Candidate, CandidateContext, CandidateParameter, EffectKind, library};
@@ -24,6 +25,8 @@ pub struct CandidateSet {
     pub candidates: Vec<Candidate>,
     /// Parameter indices in `extended` of each candidate.
     pub params: Vec<Vec<usize>>,
+    /// The candidates confined to part of the envelope, and where they act.
+    pub regions: local::LocalRegions,
 }
 
 /// The named library for `ctx` plus the generic-pool monomials that survive screening
@@ -53,10 +56,12 @@ pub fn candidate_set(
         params.push(c.add_to(&mut extended));
         candidates.push(c);
     }
+    let regions = local::LocalRegions::new(ctx.structure, &candidates);
     Ok(CandidateSet {
         extended,
         candidates,
         params,
+        regions,
     })
 }
 

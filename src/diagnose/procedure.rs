@@ -15,12 +15,29 @@
 //! 1. its MMR estimates are significant: the joint Wald test of all its parameters has a
 //!    P-value below α / (number of named candidates scored in the step) (Bonferroni);
 //! 2. it is plausible: every estimate lies in the physical range of its parameter;
-//! 3. it pays on held-out data: on some axis the cross-validated NRMSE (the mean over
+//! 3. it predicts held-out data better than chance: the held-out likelihood-ratio
+//!    statistic Σ_j Σₐ (SSE_before − SSE_after)/σ̂²_ja (σ̂²_ja the current model's held-out
+//!    mean square error on fold j, axis a) lies above what a candidate with no effect
+//!    reaches at the Bonferroni level (`required_lr`: its null distribution with
+//!    coloured residuals): a test on the validation data itself, so the verdict scales
+//!    with their noise and length;
+//! 4. it pays enough to matter: on some axis the cross-validated NRMSE (the mean over
 //!    folds, so each log counts alike) falls by at least [`DiagnoseOptions::min_gain`]
 //!    (relative), so does the sum over all axes,
 //!    and no axis gets worse by more than [`DiagnoseOptions::max_loss`]. All axes count:
 //!    the MMR couples them through shared parameters, so a candidate can pay on an axis
-//!    it has no column on.
+//!    it has no column on. An effect confined to part of the envelope
+//!    ([`super::local`]: ground effect, wake interaction, vortex ring) is judged on the
+//!    held-out samples where it acts and on the axes it acts on, so a short stretch near
+//!    the ground is not diluted by a long flight away from it.
+//!
+//! After each addition every earlier addition is tested again against the model without
+//! it, and withdrawn when it would no longer be accepted (a term that only stood in for
+//! the effect found later). Terms of the generic pool are a family of unnamed hypotheses:
+//! at most [`DiagnoseOptions::max_generic`] of them enter a model. An added effect whose
+//! held-out fit another candidate of the same kind matches within noise (a weak rotor and
+//! a stronger rotor diagonally opposite, of the same spin) is reported with it as one
+//! finding, not separable with these data.
 //!
 //! Among accepted candidates, completions of the Eq. 22 structure (terms its own
 //! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
@@ -47,9 +64,10 @@
 //! ([`ModelStructure::is_control_effectiveness`]) are never left out.
 
 use serde::Serialize;
-use statrs::distribution::{ChiSquared, ContinuousCDF};
+use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 
 use super::candidates::{Candidate, EffectKind};
+use super::local::LocalFolds;
 use crate::estimate::{self, AxisMetrics, CrossValidation, EstimateError, Fit, FitOptions, Folds};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
@@ -68,6 +86,9 @@ pub struct DiagnoseOptions {
     pub look_alike: f64,
     /// Most effects added.
     pub max_effects: usize,
+    /// Most generic-pool terms in a model (a stricter rule for the family of unnamed
+    /// hypotheses than for named ones: each can only say "something of this shape").
+    pub max_generic: usize,
     /// Factor on the parameter variances before the significance test, for coloured
     /// residuals: with lag-1 residual autocorrelation ρ, about (1 + ρ)/(1 − ρ) (an AR(1)
     /// effective sample size). 1 for independent samples (sweeps).
@@ -82,6 +103,7 @@ impl Default for DiagnoseOptions {
             max_loss: 0.30,
             look_alike: 0.1,
             max_effects: 8,
+            max_generic: 1,
             variance_inflation: 1.0,
         }
     }
@@ -117,6 +139,13 @@ pub struct CandidateScore {
     pub validation_gain: [f64; 6],
     /// Sum of the gains over all six axes (losses count negative).
     pub total_gain: f64,
+    /// Held-out likelihood-ratio statistic against the model before it (module docs).
+    pub held_out_lr: f64,
+    /// For an effect confined to part of the envelope: the relative validation-NRMSE
+    /// reduction per axis on the held-out samples where it acts, Fx…Mz.
+    pub local_gain: Option<[f64; 6]>,
+    /// Share of the held-out samples where it acts (1 for effects acting everywhere).
+    pub active_share: f64,
     /// P-value of the joint Wald test that all its parameters are zero (one test per
     /// candidate, however many parameters it has).
     pub p: f64,
@@ -135,6 +164,18 @@ pub enum Rejection {
         p: f64,
         /// The (multiple-testing corrected) level it had to beat.
         level: f64,
+    },
+    /// The held-out likelihood ratio is within what chance gives.
+    NotPredictive {
+        /// Held-out likelihood-ratio statistic.
+        statistic: f64,
+        /// κ χ²_k(1 − level) it had to reach.
+        required: f64,
+    },
+    /// The model already holds [`DiagnoseOptions::max_generic`] generic-pool terms.
+    GenericLimit {
+        /// The limit.
+        limit: usize,
     },
     /// A parameter outside its physical range.
     Implausible {
@@ -190,6 +231,16 @@ impl std::fmt::Display for Rejection {
                 100.0 * gain,
                 100.0 * required
             ),
+            Self::NotPredictive {
+                statistic,
+                required,
+            } => write!(
+                f,
+                "held-out likelihood ratio {statistic:.1} below {required:.1}"
+            ),
+            Self::GenericLimit { limit } => {
+                write!(f, "the model already holds {limit} generic term(s)")
+            }
             Self::Loss { loss } => {
                 write!(f, "validation worse by {:.1} % on an axis", 100.0 * loss)
             }
@@ -206,6 +257,11 @@ pub struct DiagnosisStep {
     pub added: Option<usize>,
     /// Other kinds the data cannot tell apart from the added one.
     pub look_alikes: Vec<String>,
+    /// Candidates of the added one's kind whose held-out fit equals it within noise, as
+    /// findings (e.g. "rotor 1 stronger by 10.2 %").
+    pub not_separable: Vec<String>,
+    /// Earlier additions withdrawn after this one, with the reason.
+    pub withdrawn: Vec<String>,
 }
 
 /// A term (a parameter's columns on one axis) left out of the final model because
@@ -224,8 +280,12 @@ pub struct Unsupported {
 pub struct Diagnosis {
     /// Steps in order; the last one adds nothing (or the effect limit was reached).
     pub steps: Vec<DiagnosisStep>,
-    /// Effects added, in order.
+    /// Effects added, in order (without those withdrawn later).
     pub effects_added: Vec<CandidateScore>,
+    /// One sentence per effect added, with what the data cannot tell it from.
+    pub findings: Vec<String>,
+    /// The search stopped at [`DiagnoseOptions::max_effects`] with candidates left.
+    pub stopped_at_limit: bool,
     /// Terms left out of the final model (of Eq. 22 or added), in order.
     pub unsupported: Vec<Unsupported>,
     /// Names of the cross-validation folds' test data (logs left out, or the hold-out).
@@ -282,6 +342,8 @@ pub struct CandidateStatistics<'a> {
     pub folds: &'a Folds,
     /// Reporting-only validation statistics over `extended` (no decision uses them).
     pub report: Option<&'a Accumulator>,
+    /// Held-out statistics where each local candidate acts ([`super::local`]).
+    pub local: &'a [LocalFolds],
 }
 
 /// Physical range of a candidate parameter (by name prefix).
@@ -290,8 +352,10 @@ fn plausible(name: &str, value: f64) -> bool {
     match name {
         n if n.starts_with("thrust_scale_") || n.starts_with("torque_scale_") => range(-0.6, 0.6),
         "cg_dx" | "cg_dy" | "cg_dz" => range(-0.2, 0.2),
-        "ground_effect_scale" => range(0.0, 3.0),
+        n if n.starts_with("ground_effect_scale") => range(0.0, 3.0),
         "wake_thrust_loss" => range(0.0, 1.0),
+        // Per unit advance ratio: a full loss at μ ≈ 0.3 is k ≈ 3.
+        "wake_thrust_loss_advance" => range(0.0, 5.0),
         // Measured vortex-ring thrust losses are tens of percent; a fitted loss beyond
         // 60 % is a bump shape fitting inflow-model error, not the state itself.
         "vortex_ring_thrust_loss" => range(0.0, 0.6),
@@ -435,27 +499,46 @@ pub fn diagnose(
     options: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let inflation = options.variance_inflation;
-    let mut kept: Vec<usize> = stats.columns_of(|p| p < stats.base_params);
+    let kept: Vec<usize> = stats.columns_of(|p| p < stats.base_params);
     let base = trial(stats, &kept, fit_options, inflation)?;
-    let mut current = base.clone();
-    let mut added: Vec<usize> = Vec::new();
+    let mut search = Search {
+        stats,
+        fit_options,
+        options,
+        kept,
+        current: base.clone(),
+        tried: Vec::new(),
+        in_model: Vec::new(),
+    };
     let mut steps = Vec::new();
-    let mut effects_added = Vec::new();
-    while added.len() < options.max_effects {
-        let Some(step) = forward_step(stats, &kept, &added, &current, fit_options, options) else {
+    let mut stopped_at_limit = false;
+    loop {
+        if search.tried.len() >= options.max_effects {
+            stopped_at_limit = true;
+            break;
+        }
+        let Some((mut step, winner)) = search.forward_step() else {
             break;
         };
-        let (step, winner) = step;
-        steps.push(step);
         let Some((c, t)) = winner else {
+            steps.push(step);
             break;
         };
-        added.push(c);
-        kept = t.columns.clone();
-        current = t;
-        let last = steps.last().expect("pushed");
-        effects_added.push(last.ranking[0].clone());
+        search.tried.push(c);
+        search.kept = t.columns.clone();
+        search.current = t;
+        search
+            .in_model
+            .push((c, step.ranking[0].clone(), step.not_separable.clone()));
+        step.withdrawn = search.retest(c);
+        steps.push(step);
     }
+    let Search {
+        mut kept,
+        mut current,
+        in_model,
+        ..
+    } = search;
     let unsupported = prune(stats, &mut kept, &mut current, fit_options, options);
     let validation = stats
         .report
@@ -470,7 +553,9 @@ pub fn diagnose(
         |cv: &CrossValidation| (0..cv.folds.len()).map(|j| cv.fold_metrics(j)).collect();
     Ok(Diagnosis {
         steps,
-        effects_added,
+        findings: in_model.iter().map(|(_, s, alt)| finding(s, alt)).collect(),
+        effects_added: in_model.into_iter().map(|(_, s, _)| s).collect(),
+        stopped_at_limit,
         unsupported,
         folds: stats.folds.names.clone(),
         before: base.cv.pooled_metrics(),
@@ -485,85 +570,273 @@ pub fn diagnose(
     })
 }
 
-/// One forward step: every remaining candidate scored against the current model
-/// (parameters `kept`), ranked; the winner (candidate index and its trial) when one is
-/// acceptable. `None` when no candidate remains.
-fn forward_step(
-    stats: &CandidateStatistics,
-    kept: &[usize],
-    added: &[usize],
-    current: &Trial,
-    fit_options: &FitOptions,
-    options: &DiagnoseOptions,
-) -> Option<(DiagnosisStep, Option<(usize, Trial)>)> {
-    let remaining: Vec<usize> = (0..stats.candidates.len())
-        .filter(|c| !added.contains(c))
-        .collect();
-    if remaining.is_empty() {
-        return None;
+/// One sentence for an added effect: a weak or strong rotor by how much, else its name;
+/// with the candidates the data cannot separate from it.
+fn finding(s: &CandidateScore, not_separable: &[String]) -> String {
+    let own = describe(s);
+    if not_separable.is_empty() {
+        own
+    } else {
+        format!(
+            "{own} or {} (not separable with these data)",
+            not_separable.join(" or ")
+        )
     }
-    // Bonferroni: named candidates over those still in play; generic ones over the
-    // whole pool they were screened from.
-    let named = remaining
+}
+
+/// "rotor 3 weaker by 9.8 %" for a rotor asymmetry, else the candidate's name.
+fn describe(s: &CandidateScore) -> String {
+    let thrust = s
+        .parameters
         .iter()
-        .filter(|&&c| stats.candidates[c].kind != EffectKind::Generic)
-        .count();
-    let level = |c: usize| match stats.candidates[c].kind {
-        EffectKind::Generic => options.alpha / super::generic::pool_size() as f64,
-        _ => options.alpha / named.max(1) as f64,
-    };
-    let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> = remaining
-        .iter()
-        .map(|&c| score(stats, kept, c, current, fit_options, options, level(c)))
-        .collect();
-    // Accepted first; among them completions of the Eq. 22 structure before
-    // undeclared effects (so an effect is judged against a model that already has
-    // the terms its own assumptions drop), and named effects before generic terms;
-    // then by validation gain.
-    let look_alike = options.look_alike;
-    scored.sort_by(|a, b| {
-        let key = |s: &CandidateScore| {
-            let ok = s.rejected.is_none();
-            (ok, ok && s.kind.is_model_completion())
-        };
-        key(&a.0)
-            .cmp(&key(&b.0))
-            .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
-            .reverse()
-    });
-    let best_ok = scored
-        .first()
-        .filter(|s| s.0.rejected.is_none())
-        .map(|s| s.0.clone());
-    let look_alikes = best_ok
-        .as_ref()
-        .map(|best| {
-            scored[1..]
-                .iter()
-                .filter(|s| {
-                    s.0.rejected.is_none()
-                        && s.0.kind != best.kind
-                        && s.0.kind.is_model_completion() == best.kind.is_model_completion()
-                        && s.0.total_gain >= (1.0 - options.look_alike) * best.total_gain
-                })
-                .map(|s| s.0.name.clone())
-                .collect()
-        })
-        .unwrap_or_default();
-    let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
-    let mut winner = None;
-    for (i, (s, c, t)) in scored.into_iter().enumerate() {
-        if i == 0 && s.rejected.is_none() {
-            winner = t.map(|t| (c, t));
+        .find(|p| p.name.starts_with("thrust_scale_"));
+    match (s.kind, thrust) {
+        (EffectKind::RotorAsymmetry, Some(p)) => {
+            let rotor = p.name.trim_start_matches("thrust_scale_");
+            let how = if p.estimate < 0.0 {
+                "weaker"
+            } else {
+                "stronger"
+            };
+            format!("rotor {rotor} {how} by {:.1} %", 100.0 * p.estimate.abs())
         }
-        ranking.push(s);
+        _ => s.name.clone(),
     }
-    let step = DiagnosisStep {
-        ranking,
-        added: winner.as_ref().map(|_| 0),
-        look_alikes,
-    };
-    Some((step, winner))
+}
+
+/// The state of the forward search: the current model and what has been tried.
+struct Search<'a> {
+    stats: &'a CandidateStatistics<'a>,
+    fit_options: &'a FitOptions,
+    options: &'a DiagnoseOptions,
+    /// Columns of the current model (indices into `stats.extended`).
+    kept: Vec<usize>,
+    current: Trial,
+    /// Candidates added so far, withdrawn or not (never tried again).
+    tried: Vec<usize>,
+    /// Candidates in the current model: index, score when added, not-separable findings.
+    in_model: Vec<(usize, CandidateScore, Vec<String>)>,
+}
+
+impl Search<'_> {
+    /// Bonferroni level of candidate `c` in a step: named candidates over those still in
+    /// play; generic ones over the whole pool they were screened from.
+    fn level(&self, c: usize) -> f64 {
+        let stats = self.stats;
+        let named = (0..stats.candidates.len())
+            .filter(|c| !self.tried.contains(c))
+            .filter(|&c| stats.candidates[c].kind != EffectKind::Generic)
+            .count();
+        match stats.candidates[c].kind {
+            EffectKind::Generic => self.options.alpha / super::generic::pool_size() as f64,
+            _ => self.options.alpha / named.max(1) as f64,
+        }
+    }
+
+    /// True when the current model holds `max_generic` generic-pool terms.
+    fn generic_full(&self) -> bool {
+        let generic = self
+            .in_model
+            .iter()
+            .filter(|(c, _, _)| self.stats.candidates[*c].kind == EffectKind::Generic)
+            .count();
+        generic >= self.options.max_generic
+    }
+
+    /// The held-out statistics where candidate `c` acts, with the cross-validation of
+    /// the model with columns `columns` there; `None` for a candidate acting everywhere.
+    fn local_before(&self, c: usize, t: &Trial) -> Option<(&LocalFolds, CrossValidation)> {
+        let lf = self.stats.local.iter().find(|l| l.candidate == c)?;
+        let cv =
+            estimate::cross_validate(&t.structure, &lf.folds.select(&t.columns), self.fit_options)
+                .ok()?;
+        Some((lf, cv))
+    }
+
+    /// One forward step: every remaining candidate scored against the current model,
+    /// ranked; the winner (candidate index and its trial) when one is acceptable. `None`
+    /// when no candidate remains.
+    fn forward_step(&self) -> Option<(DiagnosisStep, Option<(usize, Trial)>)> {
+        let stats = self.stats;
+        let options = self.options;
+        // One form of an effect offered in several.
+        let has_form = |kind: EffectKind| {
+            kind.is_family_of_forms()
+                && self
+                    .in_model
+                    .iter()
+                    .any(|(c, _, _)| stats.candidates[*c].kind == kind)
+        };
+        let remaining: Vec<usize> = (0..stats.candidates.len())
+            .filter(|c| !self.tried.contains(c))
+            .filter(|&c| !has_form(stats.candidates[c].kind))
+            .collect();
+        if remaining.is_empty() {
+            return None;
+        }
+        let generic_full = self.generic_full();
+        let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> = remaining
+            .iter()
+            .map(|&c| {
+                let local = self.local_before(c, &self.current);
+                let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
+                let mut s = score(self, &self.kept, c, &self.current, local, self.level(c));
+                if generic_full && s.0.kind == EffectKind::Generic && s.0.rejected.is_none() {
+                    s.0.rejected = Some(Rejection::GenericLimit {
+                        limit: options.max_generic,
+                    });
+                }
+                s
+            })
+            .collect();
+        // Accepted first; among them completions of the Eq. 22 structure before
+        // undeclared effects (so an effect is judged against a model that already has
+        // the terms its own assumptions drop), and named effects before generic terms;
+        // then by validation gain.
+        let look_alike = options.look_alike;
+        scored.sort_by(|a, b| {
+            let key = |s: &CandidateScore| {
+                let ok = s.rejected.is_none();
+                (ok, ok && s.kind.is_model_completion())
+            };
+            key(&a.0)
+                .cmp(&key(&b.0))
+                .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
+                .reverse()
+        });
+        let best_ok = scored
+            .first()
+            .filter(|s| s.0.rejected.is_none())
+            .map(|s| s.0.clone());
+        let (look_alikes, not_separable) = best_ok
+            .as_ref()
+            .map(|best| self.alternatives(best, &scored[1..]))
+            .unwrap_or_default();
+        let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
+        let mut winner = None;
+        for (i, (s, c, t)) in scored.into_iter().enumerate() {
+            if i == 0 && s.rejected.is_none() {
+                winner = t.map(|t| (c, t));
+            }
+            ranking.push(s);
+        }
+        let step = DiagnosisStep {
+            ranking,
+            added: winner.as_ref().map(|_| 0),
+            look_alikes,
+            not_separable,
+            withdrawn: Vec::new(),
+        };
+        Some((step, winner))
+    }
+
+    /// Look-alikes of `best` (accepted candidates of other kinds in its group within
+    /// `look_alike` of its gain) and the findings of its own kind that fit the held-out
+    /// data as well within noise (κ χ²₁(1 − α) of its likelihood ratio).
+    fn alternatives(
+        &self,
+        best: &CandidateScore,
+        others: &[(CandidateScore, usize, Option<Trial>)],
+    ) -> (Vec<String>, Vec<String>) {
+        let options = self.options;
+        let accepted = others.iter().map(|s| &s.0).filter(|s| s.rejected.is_none());
+        let look_alikes = accepted
+            .clone()
+            .filter(|s| {
+                s.kind != best.kind
+                    && s.kind.is_model_completion() == best.kind.is_model_completion()
+                    && s.total_gain >= (1.0 - options.look_alike) * best.total_gain
+            })
+            .map(|s| s.name.clone())
+            .collect();
+        let noise = chi2_quantile(1.0, 1.0 - options.alpha) * options.variance_inflation.max(1.0);
+        let not_separable = accepted
+            .filter(|s| s.kind == best.kind && s.kind != EffectKind::Generic)
+            .filter(|s| (s.held_out_lr - best.held_out_lr).abs() <= noise)
+            .map(describe)
+            .collect();
+        (look_alikes, not_separable)
+    }
+
+    /// Tests every earlier addition again against the current model without it, and
+    /// withdraws those no longer accepted (all but `latest`); returns them with the
+    /// reason.
+    fn retest(&mut self, latest: usize) -> Vec<String> {
+        let mut withdrawn = Vec::new();
+        let earlier: Vec<usize> = self
+            .in_model
+            .iter()
+            .map(|(c, _, _)| *c)
+            .filter(|&c| c != latest)
+            .collect();
+        for e in earlier {
+            let stats = self.stats;
+            let own = stats.columns_of(|p| stats.candidate_params[e].contains(&p));
+            let without: Vec<usize> = self
+                .kept
+                .iter()
+                .copied()
+                .filter(|j| !own.contains(j))
+                .collect();
+            let Ok(reduced) = trial(
+                stats,
+                &without,
+                self.fit_options,
+                self.options.variance_inflation,
+            ) else {
+                continue;
+            };
+            let local = self.local_before(e, &reduced);
+            let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
+            let (s, _, _) = score(self, &without, e, &reduced, local, self.level(e));
+            if let Some(why) = s.rejected {
+                withdrawn.push(format!("{}: {why}", s.name));
+                self.kept = without;
+                self.current = reduced;
+                self.in_model.retain(|(c, _, _)| *c != e);
+            }
+        }
+        withdrawn
+    }
+}
+
+/// The `p` quantile of χ² with `k` degrees of freedom (∞ when undefined).
+fn chi2_quantile(k: f64, p: f64) -> f64 {
+    ChiSquared::new(k).map_or(f64::INFINITY, |d| d.inverse_cdf(p))
+}
+
+/// The held-out likelihood ratio a candidate of `k` parameters must reach at `level`.
+///
+/// With the candidate's true effect zero, its estimate θ̂ (fitted on the training data)
+/// scatters with covariance κσ²(X_trᵀX_tr)⁻¹, and on held-out residuals e the statistic
+/// S = (2eᵀXθ̂ − θ̂ᵀXᵀXθ̂)/σ² has mean −κkr and standard deviation 2κ√(kr) (r the ratio
+/// of held-out to training samples, κ the coloured-residual inflation of both the
+/// estimate's and the residuals' variance). S must lie z(1 − level) standard deviations
+/// above that mean: κ(2z√(kr) − kr), at least 0 (the candidate must predict better).
+fn required_lr(k: usize, folds: &Folds, inflation: f64, level: f64) -> f64 {
+    let r = folds.test_samples() as f64 / folds.train_samples().max(1) as f64;
+    held_out_threshold(k, r, inflation, level)
+}
+
+/// κ(2z√(kr) − kr), at least 0 (see [`required_lr`]).
+fn held_out_threshold(k: usize, r: f64, inflation: f64, level: f64) -> f64 {
+    let kr = k as f64 * r;
+    let z = Normal::new(0.0, 1.0).map_or(f64::INFINITY, |n| n.inverse_cdf(1.0 - level));
+    (inflation.max(1.0) * (2.0 * z * kr.sqrt() - kr)).max(0.0)
+}
+
+/// Held-out likelihood-ratio statistic of `after` against `before`:
+/// Σ_j Σₐ (SSE_before − SSE_after)/σ̂²_ja, σ̂²_ja = SSE_before/n on fold j, axis a (for
+/// Gaussian errors of that variance, twice the log-likelihood gain).
+fn held_out_lr(before: &CrossValidation, after: &CrossValidation) -> f64 {
+    before
+        .folds
+        .iter()
+        .zip(&after.folds)
+        .flat_map(|(b, a)| b.iter().zip(a))
+        .filter(|(b, _)| b.sse > 0.0 && b.n > 0.0)
+        .map(|(b, a)| (b.sse - a.sse) / (b.sse / b.n))
+        .sum()
 }
 
 /// Cross-validation score Σ_j Σₐ SSE_ja/σ̂²_ja of `cv`: each fold j's held-out errors on
@@ -653,16 +926,17 @@ fn preference(s: &CandidateScore, look_alike: f64) -> f64 {
     }
 }
 
-/// Scores candidate `c` added to the model with columns `kept`.
+/// Scores candidate `c` added to the model with columns `kept` (`current`); `local`: the
+/// held-out statistics where it acts with `current`'s cross-validation there.
 fn score(
-    stats: &CandidateStatistics,
+    search: &Search,
     kept: &[usize],
     c: usize,
     current: &Trial,
-    fit_options: &FitOptions,
-    options: &DiagnoseOptions,
+    local: Option<(&LocalFolds, &CrossValidation)>,
     level: f64,
 ) -> (CandidateScore, usize, Option<Trial>) {
+    let (stats, options) = (search.stats, search.options);
     let cand = &stats.candidates[c];
     let own_params = &stats.candidate_params[c];
     let mut columns = kept.to_vec();
@@ -676,10 +950,18 @@ fn score(
         parameters: Vec::new(),
         validation_gain: [0.0; 6],
         total_gain: 0.0,
+        held_out_lr: 0.0,
+        local_gain: None,
+        active_share: local.map_or(1.0, |(lf, _)| lf.share),
         p: 1.0,
         rejected: None,
     };
-    let t = match trial(stats, &columns, fit_options, options.variance_inflation) {
+    let t = match trial(
+        stats,
+        &columns,
+        search.fit_options,
+        options.variance_inflation,
+    ) {
         Ok(t) => t,
         Err(e) => {
             s.rejected = Some(Rejection::NotEstimable(e.to_string()));
@@ -707,15 +989,32 @@ fn score(
         .collect();
     s.p = joint_p(&t, &own, options.variance_inflation);
     s.validation_gain = gains(&current.cv, &t.cv);
+    s.held_out_lr = held_out_lr(&current.cv, &t.cv);
+    s.local_gain = local.and_then(|(lf, before)| {
+        let after = estimate::cross_validate(
+            &t.structure,
+            &lf.folds.select(&t.columns),
+            search.fit_options,
+        )
+        .ok()?;
+        Some(gains(before, &after))
+    });
     // The MMR couples the axes through shared parameters, so a candidate can pay on an
     // axis it has no column on (freeing a moment coefficient lets F_z fit itself):
-    // gains count on every axis, losses too.
+    // gains count on every axis, losses too. A local effect counts where it acts, on
+    // its own axes.
     s.total_gain = s.validation_gain.iter().sum();
-    let worst = s.validation_gain.iter().fold(0.0_f64, |m, &g| m.min(g));
-    let best_axis = s
-        .validation_gain
+    let (effect, on_axes): ([f64; 6], Vec<usize>) = match s.local_gain {
+        Some(g) => (g, axes.iter().map(|&a| a as usize).collect()),
+        None => (s.validation_gain, (0..6).collect()),
+    };
+    let best_axis = on_axes
         .iter()
-        .fold(f64::NEG_INFINITY, |m, &g| m.max(g));
+        .map(|&a| effect[a])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let net: f64 = effect.iter().sum();
+    let worst = s.validation_gain.iter().fold(0.0_f64, |m, &g| m.min(g));
+    let required_lr = required_lr(own.len(), stats.folds, options.variance_inflation, level);
     s.rejected = if s.p >= level {
         Some(Rejection::NotSignificant { p: s.p, level })
     } else if let Some(p) = s
@@ -728,14 +1027,19 @@ fn score(
             value: p.estimate,
             unit: p.unit.clone(),
         })
+    } else if s.held_out_lr < required_lr {
+        Some(Rejection::NotPredictive {
+            statistic: s.held_out_lr,
+            required: required_lr,
+        })
     } else if best_axis < options.min_gain {
         Some(Rejection::SmallGain {
             gain: best_axis,
             required: options.min_gain,
         })
-    } else if s.total_gain < options.min_gain {
+    } else if net < options.min_gain {
         Some(Rejection::SmallNetGain {
-            gain: s.total_gain,
+            gain: net,
             required: options.min_gain,
         })
     } else if worst < -options.max_loss {
@@ -786,7 +1090,18 @@ pub fn diagnose_chunks(
             acc.push(&extended, c, &mut ws)?;
         }
     }
+    let mut local_tests = set.regions.accumulators(&extended);
+    for c in validation_data {
+        set.regions.push(&extended, c, &mut local_tests, &mut ws)?;
+    }
     let folds = Folds::holdout("validation data", fa.clone(), va);
+    let local: Vec<LocalFolds> = set
+        .regions
+        .candidates
+        .iter()
+        .zip(local_tests)
+        .filter_map(|(&c, test)| LocalFolds::new(c, &folds, vec![test]))
+        .collect();
     let stats = CandidateStatistics {
         extended: &extended,
         candidates: &set.candidates,
@@ -795,6 +1110,7 @@ pub fn diagnose_chunks(
         fit: &fa,
         folds: &folds,
         report: None,
+        local: &local,
     };
     diagnose(&stats, fit_options, options)
 }
@@ -816,5 +1132,54 @@ mod tests {
             None
         );
         assert_eq!(quadratic_form_inverse(&[], &[]), None);
+    }
+
+    #[test]
+    fn held_out_threshold_follows_the_null_distribution() {
+        // One parameter, a quarter as many held-out as training samples, white
+        // residuals, level 0.0228 (z = 2.0): 2·2·√0.25 − 0.25 = 1.75.
+        let level = 1.0 - 0.977_249_868_051_820_8;
+        let t = held_out_threshold(1, 0.25, 1.0, level);
+        assert!((t - 1.75).abs() < 1e-6, "{t}");
+        // Coloured residuals scale the null's mean and spread alike: κ times.
+        let t = held_out_threshold(1, 0.25, 50.0, level);
+        assert!((t - 87.5).abs() < 1e-4, "{t}");
+        // Never below zero: a candidate must at least predict better.
+        assert_eq!(held_out_threshold(4, 10.0, 1.0, 0.4), 0.0);
+    }
+
+    fn rotor_score(rotor: usize, scale: f64, lr: f64) -> CandidateScore {
+        CandidateScore {
+            name: format!("weak rotor {rotor}"),
+            kind: EffectKind::RotorAsymmetry,
+            axes: vec![Axis::Fz],
+            parameters: vec![EffectParameter {
+                name: format!("thrust_scale_{rotor}"),
+                estimate: scale,
+                std: 0.001,
+                unit: "-".into(),
+                p: 0.0,
+            }],
+            validation_gain: [0.0; 6],
+            total_gain: 0.0,
+            held_out_lr: lr,
+            local_gain: None,
+            active_share: 1.0,
+            p: 0.0,
+            rejected: None,
+        }
+    }
+
+    #[test]
+    fn a_rotor_asymmetry_is_reported_with_its_direction_and_its_equivalent() {
+        let weak3 = rotor_score(3, -0.098, 500.0);
+        let strong1 = rotor_score(1, 0.102, 499.0);
+        assert_eq!(describe(&weak3), "rotor 3 weaker by 9.8 %");
+        assert_eq!(describe(&strong1), "rotor 1 stronger by 10.2 %");
+        assert_eq!(finding(&weak3, &[]), "rotor 3 weaker by 9.8 %");
+        assert_eq!(
+            finding(&weak3, &[describe(&strong1)]),
+            "rotor 3 weaker by 9.8 % or rotor 1 stronger by 10.2 % (not separable with these data)"
+        );
     }
 }

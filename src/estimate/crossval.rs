@@ -75,6 +75,21 @@ impl Folds {
         }
     }
 
+    /// The same training statistics with other test statistics, one per fold (e.g. the
+    /// held-out samples where a local effect acts); `None` when the counts differ.
+    pub fn with_tests(&self, test: Vec<Accumulator>) -> Option<Folds> {
+        (test.len() == self.test.len()).then(|| Folds {
+            names: self.names.clone(),
+            train: self.train.clone(),
+            test,
+        })
+    }
+
+    /// Training samples of all folds.
+    pub fn train_samples(&self) -> u64 {
+        self.train.iter().map(Accumulator::count).sum()
+    }
+
     /// Test samples of all folds.
     pub fn test_samples(&self) -> u64 {
         self.test.iter().map(Accumulator::count).sum()

@@ -111,6 +111,12 @@ pub struct DiagnosisReport {
     pub validation: Option<BeforeAfterRow>,
     /// Every step's ranked candidates.
     pub steps: Vec<StepRow>,
+    /// One sentence per effect added, with what the data cannot separate it from.
+    #[serde(default)]
+    pub findings: Vec<String>,
+    /// The search stopped at its effect limit with candidates left.
+    #[serde(default)]
+    pub stopped_at_limit: bool,
 }
 
 /// An effect (candidate) with its estimates.
@@ -136,6 +142,16 @@ pub struct EffectRow {
     pub validation_gain: Vec<f64>,
     /// P-value of the joint Wald test of its parameters.
     pub p: f64,
+    /// Held-out likelihood-ratio statistic against the model before it.
+    #[serde(default)]
+    pub held_out_lr: f64,
+    /// For an effect confined to part of the envelope, the relative validation-NRMSE
+    /// reduction per axis where it acts, Fx…Mz.
+    #[serde(default)]
+    pub local_gain: Option<Vec<f64>>,
+    /// Share of the held-out samples where it acts (1 when it acts everywhere).
+    #[serde(default)]
+    pub active_share: f64,
     /// Why it was not added (empty for an accepted candidate).
     pub rejected: String,
 }
@@ -160,6 +176,12 @@ pub struct StepRow {
     pub added: Option<String>,
     /// Other kinds the data cannot tell apart from it.
     pub look_alikes: Vec<String>,
+    /// Findings of its own kind that fit the held-out data as well within noise.
+    #[serde(default)]
+    pub not_separable: Vec<String>,
+    /// Earlier additions withdrawn after it, with the reason.
+    #[serde(default)]
+    pub withdrawn: Vec<String>,
     /// Candidates, best first.
     pub ranking: Vec<EffectRow>,
 }
@@ -184,6 +206,9 @@ impl From<&CandidateScore> for EffectRow {
                 .collect(),
             validation_gain: c.validation_gain.to_vec(),
             p: c.p,
+            held_out_lr: c.held_out_lr,
+            local_gain: c.local_gain.map(|g| g.to_vec()),
+            active_share: c.active_share,
             rejected: c
                 .rejected
                 .as_ref()
@@ -237,9 +262,13 @@ impl From<&Diagnosis> for DiagnosisReport {
                 .map(|s| StepRow {
                     added: s.added.map(|i| s.ranking[i].name.clone()),
                     look_alikes: s.look_alikes.clone(),
+                    not_separable: s.not_separable.clone(),
+                    withdrawn: s.withdrawn.clone(),
                     ranking: s.ranking.iter().map(EffectRow::from).collect(),
                 })
                 .collect(),
+            findings: d.findings.clone(),
+            stopped_at_limit: d.stopped_at_limit,
         }
     }
 }

@@ -73,6 +73,26 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
                 step.look_alikes.join(", ")
             );
         }
+        if !step.not_separable.is_empty() {
+            let _ = writeln!(
+                out,
+                "    not separable with these data: {} fits the held-out data as well",
+                step.not_separable.join(", ")
+            );
+        }
+        for w in &step.withdrawn {
+            let _ = writeln!(out, "    withdrawn (tested again without it): {w}");
+        }
+    }
+    if d.stopped_at_limit {
+        let _ = writeln!(
+            out,
+            "  the search stopped at its limit of {} effects with candidates left",
+            d.steps.len()
+        );
+    }
+    for f in &d.findings {
+        let _ = writeln!(out, "  finding: {f}");
     }
     for e in &d.effects_added {
         let axes: Vec<&str> = e.axes.iter().map(|a| a.name()).collect();

@@ -9,6 +9,7 @@
 //! | `weak_rotor=i,s[,s_q]` | rotor i (1-based), thrust scale s, torque scale s_q (default s) | a damaged propeller: rotor i's force and hub roll/pitch moment × s, its drag torque × s_q |
 //! | `cg_offset=dx,dy,dz` | m, body axes | the true CG sits at d from the reference point of the vehicle file: hubs at r_i − d, moments about the true CG |
 //! | `wake_interaction=k` | k (–) | rotor i loses the fraction k min(1, Σ_j o_ij) V_h²/(V_h² + ν0²) of its thrust, o_ij = max(0, 1 − e_ij/2R) the overlap of rotor j's wake (swept downstream along −V_h) with rotor i at lateral miss distance e_ij, for rotors i downstream of j |
+//! | `wake_advance=k` | k (–) | the same downstream rotors lose the fraction k min(1, Σ_j o_ij) μ_i of their thrust instead, μ_i = V_h/(Ω_i R) the rotor's advance ratio: a loss that keeps growing with speed |
 //! | `quadratic_drag=cx,cy,cz` | drag areas C_d A per body axis, m² | F_k = −½ ρ (C_d A)_k v_k |v_k| at the CG (air-relative velocity) |
 //! | `vortex_ring=k` | k (–, peak fractional thrust loss) | each rotor's thrust × (1 − k exp(−((w_i/ν0 − 1)/0.5)²) exp(−(V_h/ν0)²)), w_i its descent speed (down +) |
 //! | `delay=τ` | s | the logged rotor speed is the true one τ seconds earlier (flight only) |
@@ -48,6 +49,11 @@ pub enum Effect {
         /// Fractional thrust loss of a fully immersed rotor at high speed, dimensionless.
         k: f64,
     },
+    /// Rear rotors losing thrust in proportion to their advance ratio.
+    WakeAdvance {
+        /// Fractional thrust loss of a fully immersed rotor per unit advance ratio.
+        k: f64,
+    },
     /// Quadratic airframe drag.
     QuadraticDrag {
         /// Drag areas C_d A along body x, y, z, m².
@@ -81,11 +87,12 @@ pub enum Effect {
 }
 
 /// All effect names, for help texts.
-pub const EFFECT_NAMES: [&str; 10] = [
+pub const EFFECT_NAMES: [&str; 11] = [
     "ground_effect",
     "weak_rotor",
     "cg_offset",
     "wake_interaction",
+    "wake_advance",
     "quadratic_drag",
     "vortex_ring",
     "delay",
@@ -102,6 +109,7 @@ impl Effect {
             Self::WeakRotor { .. } => "weak_rotor",
             Self::CgOffset { .. } => "cg_offset",
             Self::WakeInteraction { .. } => "wake_interaction",
+            Self::WakeAdvance { .. } => "wake_advance",
             Self::QuadraticDrag { .. } => "quadratic_drag",
             Self::VortexRing { .. } => "vortex_ring",
             Self::Delay { .. } => "delay",
@@ -134,6 +142,7 @@ impl fmt::Display for Effect {
             } => write!(f, "weak_rotor={rotor},{thrust_scale},{torque_scale}"),
             Self::CgOffset { d } => write!(f, "cg_offset={}", list(d)),
             Self::WakeInteraction { k } => write!(f, "wake_interaction={k}"),
+            Self::WakeAdvance { k } => write!(f, "wake_advance={k}"),
             Self::Flapping { a } => write!(f, "flapping={a}"),
             Self::DynamicInflow { k } => write!(f, "dynamic_inflow={k}"),
             Self::QuadraticDrag { areas } => write!(f, "quadratic_drag={}", list(areas)),
@@ -236,6 +245,13 @@ impl FromStr for Effect {
                 let k = values[0];
                 Self::WakeInteraction {
                     k: in_range("k", k, (0.0..1.0).contains(&k), "must be in [0, 1)")?,
+                }
+            }
+            "wake_advance" => {
+                want(1..=1, "`wake_advance=k`")?;
+                let k = values[0];
+                Self::WakeAdvance {
+                    k: in_range("k", k, (0.0..=3.0).contains(&k), "must be in [0, 3]")?,
                 }
             }
             "quadratic_drag" => {
@@ -375,6 +391,14 @@ impl Effects {
         })
     }
 
+    /// Advance-ratio wake loss k, if on.
+    pub fn wake_advance(&self) -> Option<f64> {
+        self.find(|e| match e {
+            Effect::WakeAdvance { k } => Some(*k),
+            _ => None,
+        })
+    }
+
     /// Flapping hub-moment coefficient a (N s²/rad); zero when off.
     pub fn flapping(&self) -> f64 {
         self.find(|e| match e {
@@ -456,14 +480,41 @@ pub fn wake_factors(
     out: &mut [f64],
 ) {
     let vh2 = uv[0] * uv[0] + uv[1] * uv[1];
-    out.fill(1.0);
-    if vh2 == 0.0 {
+    let strength = vh2 / (vh2 + nu0 * nu0);
+    wake_immersions(uv, hubs, radius, out);
+    out.iter_mut().for_each(|f| *f = 1.0 - k * *f * strength);
+}
+
+/// Advance-ratio wake thrust factor of every rotor, 1 − k min(1, Σ_j o_ij) V_h/(Ω_i R)
+/// (see the module table), for in-plane airspeed (u, v) (m/s), rotor speeds `omega`
+/// (rad/s), hub positions `hubs` (m) and radius (m). Writes one factor per rotor into
+/// `out`.
+pub fn wake_advance_factors(
+    k: f64,
+    uv: [f64; 2],
+    omega: &[f64],
+    hubs: &[[f64; 3]],
+    radius: f64,
+    out: &mut [f64],
+) {
+    let vh = uv[0].hypot(uv[1]);
+    wake_immersions(uv, hubs, radius, out);
+    for (f, w) in out.iter_mut().zip(omega) {
+        let mu = if *w > 0.0 { vh / (w * radius) } else { 0.0 };
+        *f = 1.0 - k * *f * mu;
+    }
+}
+
+/// Each rotor's immersion min(1, Σ_j o_ij) in the wakes of the rotors upstream of it
+/// (module table) at in-plane airspeed (u, v) (m/s); 0 in hover.
+fn wake_immersions(uv: [f64; 2], hubs: &[[f64; 3]], radius: f64, out: &mut [f64]) {
+    let vh = uv[0].hypot(uv[1]);
+    out.fill(0.0);
+    if vh == 0.0 {
         return;
     }
-    let vh = vh2.sqrt();
     // Downstream direction: where the air goes relative to the vehicle.
     let e = [-uv[0] / vh, -uv[1] / vh];
-    let strength = vh2 / (vh2 + nu0 * nu0);
     for (i, hi) in hubs.iter().enumerate() {
         let mut immersion = 0.0;
         for (j, hj) in hubs.iter().enumerate() {
@@ -478,6 +529,6 @@ pub fn wake_factors(
             let miss = (d[0] * e[1] - d[1] * e[0]).abs();
             immersion += (1.0 - miss / (2.0 * radius)).max(0.0);
         }
-        out[i] = 1.0 - k * immersion.min(1.0) * strength;
+        out[i] = immersion.min(1.0);
     }
 }

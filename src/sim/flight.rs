@@ -47,6 +47,10 @@ pub struct FlightConfig {
     pub sensors: SensorConfig,
     /// Omit the true force/moment columns (an "IMU only" log).
     pub imu_only: bool,
+    /// Seconds flown low at the start, s: the rotor plane swings between 1 and 4 rotor
+    /// diameters above the ground, then the vehicle climbs to the usual altitude
+    /// profile (0: the usual profile throughout).
+    pub near_ground: f64,
 }
 
 impl Default for FlightConfig {
@@ -58,6 +62,7 @@ impl Default for FlightConfig {
             log_rate: 100.0,
             sensors: SensorConfig::default(),
             imu_only: false,
+            near_ground: 0.0,
         }
     }
 }
@@ -106,6 +111,8 @@ pub struct Manoeuvre {
     scale: f64,
     base_height: f64,
     phases: [f64; 6],
+    /// Low start: its duration (s) and the rotor diameter and hub height (m).
+    low: Option<(f64, f64, f64)>,
 }
 
 impl Manoeuvre {
@@ -122,7 +129,35 @@ impl Manoeuvre {
             scale,
             base_height,
             phases,
+            low: None,
         }
+    }
+
+    /// The same reference flown low for its first `seconds` (see
+    /// [`FlightConfig::near_ground`]), then at the altitude of a flight without ground
+    /// effect.
+    pub fn with_low_start(mut self, model: &TruthModel, seconds: f64) -> Self {
+        if seconds > 0.0 {
+            let p = &model.vehicle.props;
+            self.low = Some((seconds, 2.0 * p.rotor_radius, p.hub_height));
+            self.base_height = 3.0 * self.scale * self.scale;
+        }
+        self
+    }
+
+    /// CG height of the reference at time `t` (s) and scaled time `ts`: the usual swing
+    /// above `base_height`, or while low the rotor plane between 1 and 4 diameters,
+    /// blended into the usual swing over 4 s (smoothstep).
+    fn height(&self, t: f64, ts: f64) -> f64 {
+        let l = self.scale * self.scale;
+        let usual = self.base_height + 6.0 * l * (1.0 - (0.7 * ts).cos());
+        let Some((until, diameter, hub)) = self.low else {
+            return usual;
+        };
+        let low = diameter * (2.5 - 1.5 * (0.9 * ts).cos()) - hub;
+        let x = ((t - until) / 4.0).clamp(0.0, 1.0);
+        let blend = x * x * (3.0 - 2.0 * x);
+        (1.0 - blend) * low + blend * usual
     }
 
     fn position(&self, t: f64) -> (Vector3<f64>, f64, [f64; 2]) {
@@ -142,7 +177,7 @@ impl Manoeuvre {
         let pos = Vector3::new(
             30.0 * l * (0.5 * ts).sin(),
             7.0 * l * (1.0 * ts).sin(),
-            -(self.base_height + 6.0 * l * (1.0 - (0.7 * ts).cos())),
+            -self.height(t, ts),
         );
         let yaw = 1.2 * (1.7 * ts).sin();
         let tau = std::f64::consts::TAU;
@@ -322,7 +357,7 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
     let vehicle = &model.vehicle;
     let n = vehicle.rotor_count();
     let mut rng = StdRng::seed_from_u64(seed);
-    let manoeuvre = Manoeuvre::new(model, &mut rng);
+    let manoeuvre = Manoeuvre::new(model, &mut rng).with_low_start(model, config.near_ground);
     let sensors = Sensors::new(config.sensors, &mut rng);
     let inertia = Matrix3::from_fn(|r, c| vehicle.props.inertia[r][c]);
     let wind = model.effects.wind();

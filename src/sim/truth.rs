@@ -7,7 +7,9 @@ use std::path::Path;
 use serde::Deserialize;
 
 use super::blade_element::{BladeDescription, BladeElementRotor, BladeOverrides, RotorKinematics};
-use super::effects::{Effects, ground_effect_ratio, vortex_ring_factor, wake_factors};
+use super::effects::{
+    Effects, ground_effect_ratio, vortex_ring_factor, wake_advance_factors, wake_factors,
+};
 use super::inflow::{InflowModel, InflowState};
 use crate::util::{cross, dot};
 use crate::vehicle::Vehicle;
@@ -210,6 +212,21 @@ impl TruthModel {
             }
             None => Vec::new(),
         };
+        let wake_advance = match self.effects.wake_advance() {
+            Some(k) => {
+                let mut w = vec![1.0; n];
+                wake_advance_factors(
+                    k,
+                    [x.velocity[0], x.velocity[1]],
+                    x.omega,
+                    &self.hubs,
+                    radius,
+                    &mut w,
+                );
+                w
+            }
+            None => Vec::new(),
+        };
         let weak = self.effects.weak_rotor();
         let mut out = [0.0; 6];
         for (i, (hub, rotor)) in self.hubs.iter().zip(self.vehicle.rotors()).enumerate() {
@@ -222,7 +239,8 @@ impl TruthModel {
             };
             let loads = self.rotor.loads(&kin, &self.inflow, &mut inflow[i]);
             let (mut f, mut m) = (loads.force, loads.moment);
-            let mut thrust_factor = wake.get(i).copied().unwrap_or(1.0);
+            let mut thrust_factor =
+                wake.get(i).copied().unwrap_or(1.0) * wake_advance.get(i).copied().unwrap_or(1.0);
             if let (Some(k), Some(h)) = (self.effects.ground_effect(), x.height) {
                 let down = x.down_row.unwrap_or([0.0, 0.0, 1.0]);
                 let z = h - dot(&down, hub);

@@ -1,0 +1,181 @@
+//! Where a candidate acts: effects confined to part of the envelope (near the ground, in
+//! the wake of other rotors, in descent near the hover inflow speed) are judged on the
+//! held-out samples where they act, not diluted over a whole log.
+//!
+//! A candidate with an [`Activity`] gets a second set of held-out statistics, accumulated
+//! over only the samples where its activity signal reaches the threshold; its validation
+//! gain is then measured there ([`LocalFolds`]), with the training statistics of the
+//! ordinary folds.
+
+use crate::estimate::Folds;
+use crate::model::{Column, ModelStructure, Parameter, Term, Workspace};
+use crate::sample::{Axis, SampleChunk};
+use crate::stats::{AccumulateError, Accumulator};
+
+use super::candidates::Candidate;
+
+/// The part of the envelope where a candidate acts: samples whose activity (a sum of
+/// signal products, dimensionless) reaches `threshold`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Activity {
+    /// Activity signal of one sample, e.g. the Cheeseman–Bennett thrust gain.
+    pub terms: Vec<Term>,
+    /// Smallest activity that counts as acting.
+    pub threshold: f64,
+}
+
+/// The local candidates of a candidate set and the structure that evaluates their
+/// activity signals (one column each).
+#[derive(Debug, Clone)]
+pub struct LocalRegions {
+    /// Candidate index (into the candidate set) of each region.
+    pub candidates: Vec<usize>,
+    thresholds: Vec<f64>,
+    activity: ModelStructure,
+}
+
+impl LocalRegions {
+    /// The regions of the candidates with an activity; `base` supplies the vehicle's
+    /// geometry for the signals.
+    pub fn new(base: &ModelStructure, candidates: &[Candidate]) -> Self {
+        let mut activity = base.select_columns(&[]);
+        let mut regions = Vec::new();
+        let mut thresholds = Vec::new();
+        for (c, cand) in candidates.iter().enumerate() {
+            let Some(a) = &cand.activity else { continue };
+            let column = Column {
+                axis: Axis::Fx,
+                param: 0,
+                label: format!("activity of {}", cand.name),
+                terms: a.terms.clone(),
+            };
+            let param = Parameter {
+                name: format!("activity_{c}"),
+                unit: "-".into(),
+            };
+            activity.add_parameter(param, vec![column]);
+            regions.push(c);
+            thresholds.push(a.threshold);
+        }
+        Self {
+            candidates: regions,
+            thresholds,
+            activity,
+        }
+    }
+
+    /// Number of regions.
+    pub fn len(&self) -> usize {
+        self.candidates.len()
+    }
+
+    /// True without local candidates.
+    pub fn is_empty(&self) -> bool {
+        self.candidates.is_empty()
+    }
+
+    /// One empty accumulator over `extended` per region.
+    pub fn accumulators(&self, extended: &ModelStructure) -> Vec<Accumulator> {
+        self.candidates
+            .iter()
+            .map(|_| Accumulator::new(extended))
+            .collect()
+    }
+
+    /// Pushes the samples of `chunk` where each region's candidate acts into that
+    /// region's accumulator in `into` (one per region, over `extended`).
+    pub fn push(
+        &self,
+        extended: &ModelStructure,
+        chunk: &SampleChunk,
+        into: &mut [Accumulator],
+        ws: &mut Workspace,
+    ) -> Result<(), AccumulateError> {
+        if self.is_empty() || chunk.is_empty() {
+            return Ok(());
+        }
+        let mut active_ws = Workspace::default();
+        self.activity
+            .assemble(chunk, &mut active_ws)
+            .map_err(AccumulateError::from)?;
+        for (k, acc) in into.iter_mut().enumerate() {
+            let values = active_ws.column(k);
+            let part = active_part(chunk, values, self.thresholds[k]);
+            if !part.is_empty() {
+                acc.push(extended, &part, ws)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The samples of `chunk` whose activity `values` reach `threshold`, in order.
+fn active_part(chunk: &SampleChunk, values: &[f64], threshold: f64) -> SampleChunk {
+    let mut part = SampleChunk::default();
+    let mut start = None;
+    for (i, v) in values.iter().enumerate() {
+        match (v.abs() >= threshold, start) {
+            (true, None) => start = Some(i),
+            (false, Some(s)) => {
+                part.extend_from(chunk, s..i);
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(s) = start {
+        part.extend_from(chunk, s..values.len());
+    }
+    part
+}
+
+/// The held-out statistics of one local candidate over the cross-validation folds.
+#[derive(Debug, Clone)]
+pub struct LocalFolds {
+    /// Candidate index.
+    pub candidate: usize,
+    /// The ordinary training statistics with held-out statistics of the active samples.
+    pub folds: Folds,
+    /// Active held-out samples over all held-out samples.
+    pub share: f64,
+}
+
+impl LocalFolds {
+    /// `tests[j]` the active held-out samples of fold j of `folds`; `None` when a fold
+    /// has none (the gain there cannot be measured).
+    pub fn new(candidate: usize, folds: &Folds, tests: Vec<Accumulator>) -> Option<Self> {
+        if tests.iter().any(|t| t.count() == 0) {
+            return None;
+        }
+        let active: u64 = tests.iter().map(Accumulator::count).sum();
+        let share = active as f64 / folds.test_samples().max(1) as f64;
+        Some(Self {
+            candidate,
+            folds: folds.with_tests(tests)?,
+            share,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sample::Sample;
+
+    #[test]
+    fn the_active_part_keeps_the_samples_at_or_above_the_threshold_in_order() {
+        let mut chunk = SampleChunk::default();
+        for k in 0..6 {
+            chunk.push(&Sample {
+                t: k as f64,
+                omega: vec![1.0; 4],
+                ..Sample::default()
+            });
+        }
+        let values = [0.0, 0.02, -0.01, 0.005, 0.0, 0.5];
+        let part = active_part(&chunk, &values, 0.01);
+        // |value| ≥ 0.01: samples 1, 2 (a run) and 5 (a run at the end).
+        assert_eq!(part.t, vec![1.0, 2.0, 5.0]);
+        assert!(active_part(&chunk, &values, 1.0).is_empty());
+    }
+}

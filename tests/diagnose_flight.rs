@@ -1,0 +1,83 @@
+//! Closing the loop on noisy simulated flights (sensor noise, coloured residuals, the
+//! default 20 % segment hold-out) through the library's one fit path: an effect that
+//! acts in part of the envelope only, and what a clean flight gets.
+
+use std::path::Path;
+
+use mrsysid::diagnose::{Diagnosis, EffectKind};
+use mrsysid::sim::flight::{FlightConfig, fly};
+use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
+use mrsysid::{Identification, MemoryLog, Vehicle};
+
+fn vehicle() -> Vehicle {
+    Vehicle::from_toml_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("data/vehicles/quad_x.toml"),
+    )
+    .unwrap()
+}
+
+/// Flies `duration` s (the first `near_ground` s low) with `effects` and diagnoses it.
+fn diagnose_flight(effects: &[&str], duration: f64, near_ground: f64, seed: u64) -> Diagnosis {
+    let v = vehicle();
+    let list: Vec<Effect> = effects.iter().map(|e| e.parse().unwrap()).collect();
+    let truth =
+        TruthModel::new(&v, &RotorFile::default(), Effects::new(list, &v).unwrap()).unwrap();
+    let cfg = FlightConfig {
+        duration,
+        near_ground,
+        ..Default::default()
+    };
+    let log = fly(&truth, &cfg, seed).unwrap();
+    let height = &log.samples.height;
+    let low = height
+        .iter()
+        .filter(|&&z| z + v.props.hub_height < 8.0 * v.props.rotor_radius);
+    println!(
+        "share within 4 rotor diameters: {:.2}",
+        low.count() as f64 / height.len() as f64
+    );
+    let memory = MemoryLog::from_chunks("flight", [log.samples]).unwrap();
+    let results = Identification::new(v)
+        .log(memory)
+        .diagnose(true)
+        .run()
+        .unwrap();
+    results.outcome().diagnosis.clone().unwrap()
+}
+
+/// The first 30 s of a 60 s flight swing the rotor plane between 1 and 4 diameters
+/// above the ground (under half the log within 4 diameters: 34 % measured), then the
+/// vehicle climbs away. Cheeseman–Bennett ground effect on each rotor at its own height
+/// is a few percent of thrust down there and nothing above, and the aggressive
+/// manoeuvre tilts the vehicle so the low rotors feel more of it (a roll and pitch
+/// moment). Before this test, the one ground-effect form (every rotor at the CG's
+/// height) was not even significant and nothing named the effect; now the per-rotor
+/// form is chosen and judged on the held-out samples where it acts (9 % of them here).
+#[test]
+fn ground_effect_in_a_partly_low_flight_is_found_in_its_per_rotor_form() {
+    let d = diagnose_flight(&["ground_effect=1"], 60.0, 30.0, 14_000);
+    println!("{:#?}", d.findings);
+    let e = d
+        .effects_added
+        .iter()
+        .find(|e| e.kind == EffectKind::GroundEffect)
+        .unwrap_or_else(|| panic!("no ground effect: {:#?}", d.findings));
+    assert_eq!(e.name, "ground effect, per-rotor height");
+    assert!(e.active_share < 0.5, "acts on {}", e.active_share);
+    let local = e.local_gain.expect("judged where it acts");
+    // Where it acts the thrust and moments are much better predicted (51–86 % measured).
+    assert!(local[2] > 0.3 && local[3] > 0.3, "{local:?}");
+    // Cheeseman–Bennett is the truth's law: the scale in the final model (after the
+    // completions that follow it) within 25 % of 1 (1.01 ± 0.07 measured; 0.61 when
+    // added, before the in-plane force lever arm and rate damping).
+    let i = d
+        .structure
+        .param_index("ground_effect_scale_per_rotor")
+        .expect("in the final model");
+    let (k, std) = (d.theta[i], d.std[i]);
+    println!(
+        "scale {k} ± {std} (when added {})",
+        e.parameters[0].estimate
+    );
+    assert!((k - 1.0).abs() < 0.25, "{k}");
+}
