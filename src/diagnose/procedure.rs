@@ -33,7 +33,8 @@
 //!
 //! After each addition every earlier addition is tested again against the model without
 //! it, and withdrawn when it would no longer be accepted (a term that only stood in for
-//! the effect found later). Terms of the generic pool are a family of unnamed hypotheses:
+//! the effect found later); to stay it needs half the gain it needed to enter, so a
+//! term near the bar does not enter and leave in turn. Terms of the generic pool are a family of unnamed hypotheses:
 //! at most [`DiagnoseOptions::max_generic`] of them enter a model. An added effect whose
 //! held-out fit another candidate of the same kind matches within noise (a weak rotor and
 //! a stronger rotor diagonally opposite, of the same spin) is reported with it as one
@@ -680,7 +681,15 @@ impl Search<'_> {
             .map(|&c| {
                 let local = self.local_before(c, &self.current);
                 let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
-                let mut s = score(self, &self.kept, c, &self.current, local, self.level(c));
+                let mut s = score(
+                    self,
+                    &self.kept,
+                    c,
+                    &self.current,
+                    local,
+                    self.level(c),
+                    options.min_gain,
+                );
                 if generic_full && s.0.kind == EffectKind::Generic && s.0.rejected.is_none() {
                     s.0.rejected = Some(Rejection::GenericLimit {
                         limit: options.max_generic,
@@ -788,7 +797,10 @@ impl Search<'_> {
             };
             let local = self.local_before(e, &reduced);
             let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
-            let (s, _, _) = score(self, &without, e, &reduced, local, self.level(e));
+            // Half the entry gain to stay (a stepwise rule's removal threshold below its
+            // entry threshold, so a term near the bar does not enter and leave in turn).
+            let stay = 0.5 * self.options.min_gain;
+            let (s, _, _) = score(self, &without, e, &reduced, local, self.level(e), stay);
             if let Some(why) = s.rejected {
                 withdrawn.push(format!("{}: {why}", s.name));
                 self.kept = without;
@@ -927,7 +939,8 @@ fn preference(s: &CandidateScore, look_alike: f64) -> f64 {
 }
 
 /// Scores candidate `c` added to the model with columns `kept` (`current`); `local`: the
-/// held-out statistics where it acts with `current`'s cross-validation there.
+/// held-out statistics where it acts with `current`'s cross-validation there; it must
+/// gain `min_gain` (relative NRMSE) to be accepted.
 fn score(
     search: &Search,
     kept: &[usize],
@@ -935,6 +948,7 @@ fn score(
     current: &Trial,
     local: Option<(&LocalFolds, &CrossValidation)>,
     level: f64,
+    min_gain: f64,
 ) -> (CandidateScore, usize, Option<Trial>) {
     let (stats, options) = (search.stats, search.options);
     let cand = &stats.candidates[c];
@@ -1032,15 +1046,15 @@ fn score(
             statistic: s.held_out_lr,
             required: required_lr,
         })
-    } else if best_axis < options.min_gain {
+    } else if best_axis < min_gain {
         Some(Rejection::SmallGain {
             gain: best_axis,
-            required: options.min_gain,
+            required: min_gain,
         })
-    } else if net < options.min_gain {
+    } else if net < min_gain {
         Some(Rejection::SmallNetGain {
             gain: net,
-            required: options.min_gain,
+            required: min_gain,
         })
     } else if worst < -options.max_loss {
         Some(Rejection::Loss { loss: -worst })
