@@ -739,8 +739,8 @@ impl Search<'_> {
         Some((step, winner))
     }
 
-    /// Look-alikes of `best` (accepted candidates of other kinds in its group within
-    /// `look_alike` of its gain) and the findings of its own kind that fit the held-out
+    /// Look-alikes of `best` (candidates of other kinds in its group within `look_alike`
+    /// of its gain, significant and plausible) and the findings of its own kind that fit the held-out
     /// data as well within noise (κ χ²₁(1 − α) of its likelihood ratio).
     fn alternatives(
         &self,
@@ -749,8 +749,19 @@ impl Search<'_> {
     ) -> (Vec<String>, Vec<String>) {
         let options = self.options;
         let accepted = others.iter().map(|s| &s.0).filter(|s| s.rejected.is_none());
-        let look_alikes = accepted
-            .clone()
+        // A look-alike may miss a held-out bar the winner just cleared: it explains as
+        // much, significantly and plausibly.
+        let comparable = others.iter().map(|s| &s.0).filter(|s| {
+            matches!(
+                s.rejected,
+                None | Some(
+                    Rejection::NotPredictive { .. }
+                        | Rejection::SmallGain { .. }
+                        | Rejection::SmallNetGain { .. }
+                )
+            )
+        });
+        let look_alikes = comparable
             .filter(|s| {
                 s.kind != best.kind
                     && s.kind.is_model_completion() == best.kind.is_model_completion()
