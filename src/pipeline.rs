@@ -314,7 +314,8 @@ where
                     current = None;
                 }
                 if pending.len() == CHUNK_SAMPLES {
-                    return Some(Ok(std::mem::take(&mut pending)));
+                    let next = empty_like(&pending);
+                    return Some(Ok(std::mem::replace(&mut pending, next)));
                 }
                 continue;
             }
@@ -332,6 +333,23 @@ where
             }
         }
     })
+}
+
+/// An empty chunk with the signals of `chunk` and room for [`CHUNK_SAMPLES`] samples in
+/// each, so that filling it does not reallocate (a sweep arrives one sample at a time).
+fn empty_like(chunk: &SampleChunk) -> SampleChunk {
+    let mut empty =
+        SampleChunk::with_capacity(chunk.rotor_count(), CHUNK_SAMPLES, chunk.has_omega_dot());
+    if chunk.has_height() {
+        empty.height.reserve(CHUNK_SAMPLES);
+    }
+    if chunk.has_attitude() {
+        empty
+            .attitude
+            .iter_mut()
+            .for_each(|v| v.reserve(CHUNK_SAMPLES));
+    }
+    empty
 }
 
 fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
