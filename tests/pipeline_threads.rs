@@ -111,12 +111,17 @@ fn one_two_and_four_threads_give_the_same_report() {
     assert_same_outcome(&single, &overlapped, "one log, overlapped reading");
 }
 
-/// The log at `path` read by the library's reader into a memory log.
+/// The log at `path` read by the library's reader into a memory log of the file's name
+/// (the cross-validation folds and the diagnosis name the logs).
 fn in_memory(path: &Path, vehicle: &Vehicle) -> mrsysid::source::MemoryLog {
     let reader =
         mrsysid::io::open_log(path, vehicle, None, &ReadOptions::default()).expect("open log");
     let chunks: Vec<_> = reader.map(|c| c.expect("chunk")).collect();
-    mrsysid::source::MemoryLog::from_chunks("in memory", chunks).expect("memory log")
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .expect("file name");
+    mrsysid::source::MemoryLog::from_chunks(name, chunks).expect("memory log")
 }
 
 #[test]
