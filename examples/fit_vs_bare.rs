@@ -1,11 +1,18 @@
-//! End-to-end `mrsysid fit` against a bare `csv::ByteRecord` pass over the same file, in
-//! one run: wall time, peak RSS of the `fit` process, and two logs on one vs two threads.
+//! End-to-end `mrsysid fit` against single-threaded `csv::ByteRecord` passes over the
+//! same file, in one run: wall time, CPU time, peak RSS of the `fit` process, and two
+//! logs on one vs two threads. The reference of issue 12 is pass (a), which parses every
+//! field with std's `str::parse::<f64>`; the bare pass (no parsing) is shown as well.
 //!
 //! ```text
 //! cargo build --release
 //! cargo run --release --example fit_vs_bare -- 1000000
 //! cargo run --release --example fit_vs_bare -- 10000000
 //! ```
+//!
+//! The binary timed is `$MRSYSID_BIN`, else `$CARGO_TARGET_DIR/release/mrsysid`, else
+//! `target/release/mrsysid`. With `$MRSYSID_BIN_BEFORE` (e.g. a build of an older
+//! commit) every `fit` is also run with that binary, right after, for before/after
+//! figures from the same machine state.
 //!
 //! The argument is the row count. The 1 M-row quad× sweep is simulated once with
 //! `target/release/mrsysid simulate --preset quad_x --mode sweep --points 1000000 --seed 9`
@@ -36,11 +43,18 @@ fn main() {
         "row count must be a multiple of {SWEEP_ROWS}"
     );
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let bin = root.join("target/release/mrsysid");
+    let bin = std::env::var_os("MRSYSID_BIN")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("release/mrsysid"))
+        })
+        .unwrap_or_else(|| root.join("target/release/mrsysid"));
     assert!(
         bin.exists(),
-        "build the binary first: cargo build --release"
+        "build the binary first: cargo build --release ({})",
+        bin.display()
     );
+    let before = std::env::var_os("MRSYSID_BIN_BEFORE").map(PathBuf::from);
     let vehicle = root.join("data/vehicles/quad_x.toml");
     let dir = std::env::var_os("MRSYSID_BENCH_DIR")
         .map(PathBuf::from)
@@ -57,14 +71,15 @@ fn main() {
     let mb = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len()) / 1_000_000;
     println!("log: {} ({} rows, {} MB)", log.display(), rows, mb(&log));
 
-    bare_pass(&log); // warm the page cache
-    let (bare, records) = bare_pass(&log);
+    bare_pass(&log, false); // warm the page cache
+    let (bare, records) = bare_pass(&log, false);
     assert_eq!(records, rows, "bare pass record count");
-    bare_pass(&second);
-    let bare_two = bare_pass(&log).0 + bare_pass(&second).0;
+    let (parse, _) = bare_pass(&log, true);
+    bare_pass(&second, false);
+    let parse_two = bare_pass(&log, true).0 + bare_pass(&second, true).0;
 
-    let fit = |logs: &[&Path], threads: usize, diagnose: bool| {
-        let mut cmd = Command::new(&bin);
+    let fit_with = |bin: &Path, logs: &[&Path], threads: usize, diagnose: bool| {
+        let mut cmd = Command::new(bin);
         cmd.arg("fit").args(logs).arg("--vehicle").arg(&vehicle);
         cmd.args(["--quiet", "--threads", &threads.to_string()]);
         if !diagnose {
@@ -76,12 +91,12 @@ fn main() {
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("load average before the fits: {}", load.trim());
     println!(
-        "{:<44} {:>9} {:>10} {:>8} {:>13}",
-        "run", "wall, s", "× bare", "CPU, s", "peak RSS, MB"
+        "{:<52} {:>9} {:>10} {:>8} {:>13}",
+        "run", "wall, s", "× (a)", "CPU, s", "peak RSS, MB"
     );
     let row = |name: &str, m: Measured, base: Duration| {
         println!(
-            "{:<44} {:>9.2} {:>10.2} {:>8.2} {:>13.1}",
+            "{:<52} {:>9.2} {:>10.2} {:>8.2} {:>13.1}",
             name,
             m.wall.as_secs_f64(),
             m.wall.as_secs_f64() / base.as_secs_f64(),
@@ -89,43 +104,54 @@ fn main() {
             m.rss as f64 / 1024.0
         );
     };
-    println!(
-        "{:<44} {:>9.2} {:>10.2} {:>8} {:>13}",
-        "bare csv::ByteRecord pass (in process)",
-        bare.as_secs_f64(),
-        1.0,
-        "-",
-        "-"
-    );
-    row(
-        "fit --no-diagnose --threads 1",
-        fit(&[&log], 1, false),
-        bare,
-    );
-    row(
-        "fit --no-diagnose --threads 2",
-        fit(&[&log], 2, false),
-        bare,
-    );
-    row(
-        "fit (with diagnosis) --threads 1",
-        fit(&[&log], 1, true),
-        bare,
-    );
-    row(
-        "fit (with diagnosis) --threads 2",
-        fit(&[&log], 2, true),
-        bare,
-    );
-    let one = fit(&[&log, &second], 1, false);
-    let two = fit(&[&log, &second], 2, false);
-    row("two logs, fit --no-diagnose --threads 1", one, bare_two);
-    row("two logs, fit --no-diagnose --threads 2", two, bare_two);
-    println!(
-        "two logs: 1 thread / 2 threads = {:.2}× (× bare is against both bare passes, {:.2} s)",
-        one.wall.as_secs_f64() / two.wall.as_secs_f64(),
-        bare_two.as_secs_f64()
-    );
+    for (name, t) in [
+        ("bare csv::ByteRecord pass, no parsing", bare),
+        ("(a) csv::ByteRecord pass + std parse of every field", parse),
+    ] {
+        let ratio = t.as_secs_f64() / parse.as_secs_f64();
+        let secs = t.as_secs_f64();
+        println!(
+            "{name:<52} {secs:>9.2} {ratio:>10.2} {:>8} {:>13}",
+            "-", "-"
+        );
+    }
+    let bins: Vec<(&str, &Path)> = std::iter::once(("", bin.as_path()))
+        .chain(before.as_deref().map(|b| ("before: ", b)))
+        .collect();
+    let runs: [(&str, bool, usize); 4] = [
+        ("(b) fit --no-diagnose --threads 1", false, 1),
+        ("(b) fit --no-diagnose --threads 2", false, 2),
+        ("(c) fit (with diagnosis) --threads 1", true, 1),
+        ("(c) fit (with diagnosis) --threads 2", true, 2),
+    ];
+    for (name, diagnose, threads) in runs {
+        for &(tag, b) in &bins {
+            row(
+                &format!("{tag}{name}"),
+                fit_with(b, &[&log], threads, diagnose),
+                parse,
+            );
+        }
+    }
+    for &(tag, b) in &bins {
+        let one = fit_with(b, &[&log, &second], 1, false);
+        let two = fit_with(b, &[&log, &second], 2, false);
+        row(
+            &format!("{tag}two logs, --no-diagnose --threads 1"),
+            one,
+            parse_two,
+        );
+        row(
+            &format!("{tag}two logs, --no-diagnose --threads 2"),
+            two,
+            parse_two,
+        );
+        println!(
+            "{tag}two logs: 1 thread / 2 threads = {:.2}× (× (a) is against both (a) passes, {:.2} s)",
+            one.wall.as_secs_f64() / two.wall.as_secs_f64(),
+            parse_two.as_secs_f64()
+        );
+    }
 }
 
 /// Simulates the 1 M-point quad× sweep into `out`.
@@ -186,19 +212,27 @@ fn time_of(line: &str) -> f64 {
         .expect("time field")
 }
 
-/// Reads every record of `path` as bytes (no parsing); wall time and record count.
-fn bare_pass(path: &Path) -> (Duration, u64) {
+/// Reads every record of `path` as bytes on this thread, with `parse` also parsing every
+/// field with std's `str::parse::<f64>`; wall time and record count.
+fn bare_pass(path: &Path, parse: bool) -> (Duration, u64) {
     let start = Instant::now();
     let mut reader = csv::ReaderBuilder::new()
         .from_path(path)
         .expect("open for the bare pass");
     let mut record = csv::ByteRecord::new();
-    let (mut records, mut bytes) = (0u64, 0usize);
+    let (mut records, mut bytes, mut sum) = (0u64, 0usize, 0.0f64);
     while reader.read_byte_record(&mut record).expect("bare pass") {
         records += 1;
         bytes += record.as_slice().len();
+        if parse {
+            for field in &record {
+                // An empty or malformed field costs its parse attempt like any other.
+                let text = std::str::from_utf8(field).unwrap_or("");
+                sum += text.parse::<f64>().unwrap_or(0.0);
+            }
+        }
     }
-    std::hint::black_box(bytes);
+    std::hint::black_box((bytes, sum));
     (start.elapsed(), records)
 }
 

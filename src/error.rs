@@ -43,6 +43,15 @@ pub enum Error {
     /// The request itself cannot be carried out.
     #[error(transparent)]
     Request(#[from] RequestError),
+    /// The temporary file holding a log's parsed samples between the two passes could
+    /// not be written or read back (e.g. the temp dir is full or not writable).
+    #[error("temporary sample file {}: {source}", path.display())]
+    Spill {
+        /// The temporary file.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
 }
 
 impl Error {

@@ -76,6 +76,7 @@ pub mod rotor;
 pub mod sample;
 pub mod sim;
 pub mod source;
+mod spill;
 pub mod stats;
 pub mod util;
 pub mod vehicle;

@@ -1,6 +1,8 @@
 //! The `mrsysid fit` pipeline, as a library call: read logs in parallel into mergeable
 //! statistics (fit data and hold-out validation data), estimate (seed §5), then a
-//! streaming second pass for residual diagnostics and plot series.
+//! streaming second pass for residual diagnostics and plot series. The text of a log
+//! file is read once: the first pass spills its parsed chunks to a temporary binary file
+//! that the second pass streams back ([`crate::spill`] explains the choice).
 //!
 //! Hold-out: without explicit validation logs, each log's time axis is cut into
 //! contiguous segments of [`Holdout::segment_seconds`] from its first sample, and every
@@ -27,6 +29,7 @@ use crate::io::{self, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Workspace};
 use crate::sample::{SampleChunk, Signals};
 use crate::source::LogSource;
+use crate::spill::{Spill, SpillWriter};
 use crate::stats::{AccumulateError, Accumulator};
 use crate::vehicle::Vehicle;
 
@@ -140,6 +143,8 @@ struct LogStats {
     summary: Summary,
     /// Optional signals of the log's first chunk, `None` for a log without samples.
     signals: Option<Signals>,
+    /// The log's parsed chunks for the second pass (log files only, when it runs).
+    spill: Option<Spill>,
 }
 
 /// What the second pass needs to know of a log from the first: the samples routed to
@@ -184,6 +189,12 @@ fn read_log(
     let keep_screening = req.diagnose.is_some();
     let mut ws = Workspace::default();
     let mut split = Splitter::new(role);
+    let mut spill = match source {
+        LogSource::File(_) if req.second_pass || req.diagnose.is_some() => {
+            Some(SpillWriter::create()?)
+        }
+        _ => None,
+    };
     let mut sink = |part: &SampleChunk, to_validation: bool| {
         let acc = if to_validation {
             &mut held_out
@@ -198,6 +209,9 @@ fn read_log(
     };
     let summary = stream_log(source, req, overlap, |chunk| {
         signals.get_or_insert_with(|| chunk.signals());
+        if let Some(w) = spill.as_mut() {
+            w.write(chunk)?;
+        }
         split.route(chunk, &mut sink)
     })?;
     split.finish(&mut sink)?;
@@ -207,6 +221,7 @@ fn read_log(
         screening,
         summary,
         signals,
+        spill: spill.map(SpillWriter::finish).transpose()?,
     })
 }
 
@@ -300,7 +315,8 @@ where
                     current = None;
                 }
                 if pending.len() == CHUNK_SAMPLES {
-                    return Some(Ok(std::mem::take(&mut pending)));
+                    let next = empty_like(&pending);
+                    return Some(Ok(std::mem::replace(&mut pending, next)));
                 }
                 continue;
             }
@@ -318,6 +334,23 @@ where
             }
         }
     })
+}
+
+/// An empty chunk with the signals of `chunk` and room for [`CHUNK_SAMPLES`] samples in
+/// each, so that filling it does not reallocate (a sweep arrives one sample at a time).
+fn empty_like(chunk: &SampleChunk) -> SampleChunk {
+    let mut empty =
+        SampleChunk::with_capacity(chunk.rotor_count(), CHUNK_SAMPLES, chunk.has_omega_dot());
+    if chunk.has_height() {
+        empty.height.reserve(CHUNK_SAMPLES);
+    }
+    if chunk.has_attitude() {
+        empty
+            .attitude
+            .iter_mut()
+            .for_each(|v| v.reserve(CHUNK_SAMPLES));
+    }
+    empty
 }
 
 fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
@@ -554,7 +587,8 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
         return Err(RequestError::NoSamples.into());
     }
     let (folds, fit_stats) = arrange(req, &parts)?;
-    let summaries = per_log.into_iter().map(|s| s.summary).collect();
+    let (summaries, spills): (Vec<Summary>, Vec<Option<Spill>>) =
+        per_log.into_iter().map(|s| (s.summary, s.spill)).unzip();
     let fit = estimate::fit(&req.structure, &fit_stats, &req.fit)?;
     let cv = estimate::cross_validate(&req.structure, &folds, &req.fit)?;
     let (validation, validation_samples) = if validation_stats.count() > 0 {
@@ -597,6 +631,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
         second_pass(
             req,
             &jobs,
+            &spills,
             &counts,
             signals,
             screening.samples(),
@@ -672,13 +707,15 @@ struct LogPass {
     local: [Vec<Accumulator>; 2],
 }
 
-/// Streams the data again: residual diagnostics of the fit samples, decimated series of
-/// both parts for plots, and the statistics of every candidate effect. Logs are passed
-/// on up to `req.threads` threads and their shares merged in job order, so the result
-/// does not depend on the thread count.
+/// Streams the data again (each log file from its spill, in job order with `jobs`):
+/// residual diagnostics of the fit samples, decimated series of both parts for plots,
+/// and the statistics of every candidate effect. Logs are passed on up to `req.threads`
+/// threads and their shares merged in job order, so the result does not depend on the
+/// thread count.
 fn second_pass(
     req: &FitRequest,
     jobs: &[(LogSource, Role)],
+    spills: &[Option<Spill>],
     counts: &[LogCounts],
     signals: Option<Signals>,
     screening: &SampleChunk,
@@ -706,7 +743,7 @@ fn second_pass(
         })
         .collect();
     let mut shares = run_jobs(jobs, req, |i, path, role, overlap| {
-        pass_log(&ctx, path, role, overlap, starts[i])
+        pass_log(&ctx, path, spills[i].as_ref(), role, overlap, starts[i])
     })?;
     let mut residuals: Option<ResidualPass> = None;
     let mut t_offset = [0.0f64; 2];
@@ -813,11 +850,12 @@ fn lay_end_to_end(
     }
 }
 
-/// The second pass over one log; `seen` counts the samples of each kind in the logs
-/// before it.
+/// The second pass over one log, from its `spill` when there is one; `seen` counts the
+/// samples of each kind in the logs before it.
 fn pass_log(
     ctx: &PassContext,
     source: &LogSource,
+    spill: Option<&Spill>,
     role: Role,
     overlap: bool,
     mut seen: [u64; 2],
@@ -879,7 +917,15 @@ fn pass_log(
         seen[k] += part.len() as u64;
         Ok(())
     };
-    stream_log(source, req, overlap, |chunk| split.route(chunk, &mut sink))?;
+    match spill {
+        Some(spill) => spill.stream(|chunk| {
+            count_progress(req, chunk);
+            split.route(chunk, &mut sink)
+        })?,
+        None => {
+            stream_log(source, req, overlap, |chunk| split.route(chunk, &mut sink))?;
+        }
+    }
     split.finish(&mut sink)?;
     Ok(share)
 }
