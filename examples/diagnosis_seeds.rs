@@ -4,6 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --example diagnosis_seeds [-- SEEDS [CASE-FILTER]]
+//! cargo run --release --example diagnosis_seeds -- 10 '30 s flight, $'   # clean flight only
 //! ```
 //!
 //! Sweeps are diagnosed with [`diagnose_chunks`] (3000 Latin-hypercube points, the last
@@ -206,7 +207,12 @@ fn main() {
             Data::NearGround(d, low) => format!("{d} s flight, first {low} s low"),
         };
         let label = format!("{label}, {}", case.effects.join(" "));
-        if !label.contains(&filter) {
+        // A filter ending in '$' must end the label.
+        let wanted = match filter.strip_suffix('$') {
+            Some(end) => label.ends_with(end),
+            None => label.contains(&filter),
+        };
+        if !wanted {
             continue;
         }
         let (mut found_count, mut most_extra) = (0, 0);
