@@ -742,12 +742,9 @@ impl ModelStructure {
             RotorGroundEffect(i) => {
                 let [x, y] = self.hubs[usize::from(i)];
                 let (r, h) = (self.rotor_radius, self.hub_height);
-                let q = &chunk.attitude;
                 for (k, d) in dst.iter_mut().enumerate() {
-                    let quat = [q[0][k], q[1][k], q[2][k], q[3][k]];
-                    let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
                     // Third row of body→NED: the down component of a body vector.
-                    let down = crate::util::quat_to_matrix(quat.map(|c| c / norm))[2];
+                    let down = body_to_ned(chunk, k)[2];
                     let hub_down = down[0] * x + down[1] * y - down[2] * h;
                     *d = ground_effect_factor(r, chunk.height[k] - hub_down);
                 }
@@ -785,13 +782,9 @@ impl ModelStructure {
             }
             NedToBody(e) => {
                 let (k, j) = (usize::from(e) / 3, usize::from(e) % 3);
-                let q = &chunk.attitude;
                 for (i, d) in dst.iter_mut().enumerate() {
-                    let quat = [q[0][i], q[1][i], q[2][i], q[3][i]];
-                    let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
-                    // Body→NED matrix R: the NED→body element (k, j) is R[j][k].
-                    let r = crate::util::quat_to_matrix(quat.map(|c| c / norm));
-                    *d = r[j][k];
+                    // The NED→body element (k, j) is body→NED's (j, k).
+                    *d = body_to_ned(chunk, i)[j][k];
                 }
             }
             VortexRing(i) => {
@@ -1300,6 +1293,14 @@ fn s_index(s: Signal, first: Signal) -> usize {
     ];
     let at = |x| order.iter().position(|&o| o == x).expect("signal in block");
     at(s) - at(first)
+}
+
+/// Body→NED rotation of sample `k` of `chunk` from its attitude quaternion (normalised).
+fn body_to_ned(chunk: &SampleChunk, k: usize) -> [[f64; 3]; 3] {
+    let q = &chunk.attitude;
+    let quat = [q[0][k], q[1][k], q[2][k], q[3][k]];
+    let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
+    crate::util::quat_to_matrix(quat.map(|c| c / norm))
 }
 
 /// Ground-effect factor g = s/(1 − s), s = (R/(4 z_r))², z_r ≥ R/2 (see

@@ -877,7 +877,7 @@ fn pass_log(
                 .map_or_else(Vec::new, |e| e.regions.accumulators(&e.structure))
         }),
     };
-    let mut ws = Workspace::default();
+    let (mut ws, mut active_ws) = (Workspace::default(), Workspace::default());
     let mut split = Splitter::new(role);
     let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), Error> {
         let k = usize::from(to_validation);
@@ -886,7 +886,13 @@ fn pass_log(
                 .push(&ext.structure, part, &mut ws)
                 .map_err(accumulate_error(source))?;
             ext.regions
-                .push(&ext.structure, part, &mut share.local[k], &mut ws)
+                .push(
+                    &ext.structure,
+                    part,
+                    &mut share.local[k],
+                    &mut ws,
+                    &mut active_ws,
+                )
                 .map_err(accumulate_error(source))?;
         }
         // Leaves the base regressors of `part` in `ws` for the plotted predictions.

@@ -83,20 +83,21 @@ impl LocalRegions {
     }
 
     /// Pushes the samples of `chunk` where each region's candidate acts into that
-    /// region's accumulator in `into` (one per region, over `extended`).
+    /// region's accumulator in `into` (one per region, over `extended`); `ws` holds the
+    /// extended regressors, `active_ws` the activity signals (both reused across chunks).
     pub fn push(
         &self,
         extended: &ModelStructure,
         chunk: &SampleChunk,
         into: &mut [Accumulator],
         ws: &mut Workspace,
+        active_ws: &mut Workspace,
     ) -> Result<(), AccumulateError> {
         if self.is_empty() || chunk.is_empty() {
             return Ok(());
         }
-        let mut active_ws = Workspace::default();
         self.activity
-            .assemble(chunk, &mut active_ws)
+            .assemble(chunk, active_ws)
             .map_err(AccumulateError::from)?;
         for (k, acc) in into.iter_mut().enumerate() {
             let values = active_ws.column(k);

@@ -1116,8 +1116,10 @@ pub fn diagnose_chunks(
         }
     }
     let mut local_tests = set.regions.accumulators(&extended);
+    let mut active_ws = crate::model::Workspace::default();
     for c in validation_data {
-        set.regions.push(&extended, c, &mut local_tests, &mut ws)?;
+        set.regions
+            .push(&extended, c, &mut local_tests, &mut ws, &mut active_ws)?;
     }
     let folds = Folds::holdout("validation data", fa.clone(), va);
     let local: Vec<LocalFolds> = set
