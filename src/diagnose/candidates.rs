@@ -195,6 +195,40 @@ impl CandidateContext<'_> {
         t
     }
 
+    /// Terms of rotor `i`'s in-plane force along body x (`along_x`) or y, N, from the
+    /// base estimates, times `scale`: rotor i's share of Eq. 22a–b at its hub's in-plane
+    /// velocity (u − r y_i, v + r x_i) (Eq. 17, the yaw rate's share that Assumption 4
+    /// drops included), ρπR² u_i (−C_H_mub R Ω_i − C_H_mub_mu0 ν0 − C_H_mub_mu V_h +
+    /// C_H_mub_muw w_i), w_i = w + p y_i − q x_i its hub's axial velocity (Eq. 18).
+    fn rotor_in_plane_force(&self, i: usize, along_x: bool, scale: f64) -> Vec<Term> {
+        use Signal::*;
+        let r = self.vehicle.props.rotor_radius;
+        let nu0 = self.vehicle.hover_induced_velocity();
+        let rotor = self.vehicle.rotors()[i];
+        let (w, _, _) = rotor_signals(i);
+        let muw = self.theta("C_H_mub_muw");
+        // u_i = u − r y_i or v_i = v + r x_i.
+        let hub = if along_x {
+            [(U, 1.0), (R, -rotor.y)]
+        } else {
+            [(V, 1.0), (R, rotor.x)]
+        };
+        let mut t = Vec::new();
+        for (velocity, arm) in hub {
+            let k = self.k() * scale * arm;
+            t.extend([
+                term(-k * self.theta("C_H_mub") * r, &[velocity, w]),
+                term(-k * self.theta("C_H_mub_mu0") * nu0, &[velocity]),
+                term(-k * self.theta("C_H_mub_mu"), &[velocity, Vh]),
+                term(k * muw, &[velocity, W]),
+                term(k * muw * rotor.y, &[velocity, P]),
+                term(-k * muw * rotor.x, &[velocity, Q]),
+            ]);
+        }
+        t.retain(|t| t.coef != 0.0);
+        t
+    }
+
     /// Terms of rotor `i`'s aerodynamic torque Q̂_i (N m) from the base estimates, times
     /// `scale`; with `rate`, of dQ̂_i/dΩ_i · Ω̇_i (N m/s).
     fn rotor_torque(&self, i: usize, scale: f64, rate: bool) -> Vec<Term> {
@@ -491,11 +525,36 @@ fn accelerometer_bias(ctx: &CandidateContext) -> Candidate {
 fn weak_rotor(ctx: &CandidateContext, i: usize) -> Candidate {
     let rotor = ctx.vehicle.rotors()[i];
     let torque = ctx.rotor_torque(i, -rotor.spin, false);
-    let mut parameters = vec![parameter(
-        &format!("thrust_scale_{}", i + 1),
-        "-",
-        ctx.thrust_change(&format!("T_{}", i + 1), &[i], |_| Vec::new(), 1.0),
-    )];
+    // Thrust, in-plane force and torque, each by its own fraction (a damaged blade
+    // changes its lift and its drag differently); the in-plane force F_i acts with the
+    // moments r_i × F_i of its hub at r_i = (x_i, y_i, −h).
+    let h = ctx.vehicle.props.hub_height;
+    let thrust = ctx.thrust_change(&format!("T_{}", i + 1), &[i], |_| Vec::new(), 1.0);
+    let in_plane = |scale_x: f64, scale_y: f64| {
+        let mut t = ctx.rotor_in_plane_force(i, true, scale_x);
+        t.extend(ctx.rotor_in_plane_force(i, false, scale_y));
+        t
+    };
+    let label = format!("H_{}", i + 1);
+    let in_plane: Vec<Column> = [
+        (Axis::Fx, in_plane(1.0, 0.0)),
+        (Axis::Fy, in_plane(0.0, 1.0)),
+        (Axis::Mx, in_plane(0.0, h)),
+        (Axis::My, in_plane(-h, 0.0)),
+        (Axis::Mz, in_plane(-rotor.y, rotor.x)),
+    ]
+    .into_iter()
+    .filter(|(_, terms)| !terms.is_empty())
+    .map(|(axis, terms)| column(axis, &label, terms))
+    .collect();
+    let mut parameters = vec![parameter(&format!("thrust_scale_{}", i + 1), "-", thrust)];
+    if !in_plane.is_empty() {
+        parameters.push(parameter(
+            &format!("in_plane_scale_{}", i + 1),
+            "-",
+            in_plane,
+        ));
+    }
     if !torque.is_empty() {
         parameters.push(parameter(
             &format!("torque_scale_{}", i + 1),
@@ -507,7 +566,7 @@ fn weak_rotor(ctx: &CandidateContext, i: usize) -> Candidate {
         kind: EffectKind::RotorAsymmetry,
         activity: None,
         name: format!("weak rotor {}", i + 1),
-        physics: "A damaged propeller or tired motor makes one rotor's thrust and torque a fraction off the others' at the same logged speed.",
+        physics: "A damaged propeller or tired motor makes one rotor's thrust, in-plane force and torque fractions off the others' at the same logged speed.",
         parameters,
     }
 }

@@ -351,7 +351,12 @@ pub struct CandidateStatistics<'a> {
 fn plausible(name: &str, value: f64) -> bool {
     let range = |lo: f64, hi: f64| (lo..=hi).contains(&value);
     match name {
-        n if n.starts_with("thrust_scale_") || n.starts_with("torque_scale_") => range(-0.6, 0.6),
+        n if n.starts_with("thrust_scale_")
+            || n.starts_with("in_plane_scale_")
+            || n.starts_with("torque_scale_") =>
+        {
+            range(-0.6, 0.6)
+        }
         "cg_dx" | "cg_dy" | "cg_dz" => range(-0.2, 0.2),
         n if n.starts_with("ground_effect_scale") => range(0.0, 3.0),
         "wake_thrust_loss" => range(0.0, 1.0),
