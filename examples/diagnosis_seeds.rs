@@ -215,7 +215,7 @@ fn main() {
         if !wanted {
             continue;
         }
-        let (mut found_count, mut most_extra) = (0, 0);
+        let (mut found_count, mut alike_count, mut most_extra) = (0, 0, 0);
         println!("## {label}");
         for s in 0..seeds {
             let seed = 1000 * (k as u64 + 1) + s;
@@ -236,11 +236,21 @@ fn main() {
                 .collect();
             let found = case.expected.is_some_and(|e| named.contains(&e));
             found_count += usize::from(found);
+            // Named as a look-alike of what was added instead.
+            let alike = !found
+                && case
+                    .expected
+                    .is_some_and(|e| d.findings.iter().any(|f| f.contains(e)));
+            alike_count += usize::from(alike);
             let extra = named.len() - usize::from(found);
             most_extra = most_extra.max(extra);
             println!(
                 "seed {seed}: {}, {extra} beyond completions and the effect: {:?}{}",
-                if found { "found" } else { "NOT FOUND" },
+                match (found, alike) {
+                    (true, _) => "found",
+                    (false, true) => "look-alike",
+                    _ => "NOT FOUND",
+                },
                 d.findings,
                 if d.stopped_at_limit {
                     " (stopped at the limit)"
@@ -258,7 +268,7 @@ fn main() {
         }
         match case.expected {
             Some(_) => println!(
-                "=> found at {found_count} of {seeds} seeds; at most {most_extra} other terms\n"
+                "=> found at {found_count} of {seeds} seeds (and as a look-alike at {alike_count}); at most {most_extra} other terms\n"
             ),
             None => println!("=> at most {most_extra} terms beyond completions\n"),
         }

@@ -43,6 +43,11 @@
 //! Among accepted candidates, completions of the Eq. 22 structure (terms its own
 //! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
 //! effects; within each group the largest validation gain summed over the axes wins.
+//! A named effect that the winning completion takes the evidence of (no longer accepted
+//! once the completion is in the model) while it explains about as much is reported as
+//! the completion's look-alike; when it explains clearly more (by more than
+//! [`DiagnoseOptions::look_alike`]) it is added first instead, the completion its
+//! look-alike, tried again in the next step.
 //! Terms of the
 //! generic pool ([`super::generic`]: residual structure with no name, whose Bonferroni
 //! divisor is the whole pool it was screened from) and moment coefficients freed from
@@ -520,7 +525,7 @@ pub fn diagnose(
     let mut stopped_at_limit = false;
     loop {
         if search.tried.len() >= options.max_effects {
-            stopped_at_limit = true;
+            stopped_at_limit = search.tried.len() < stats.candidates.len();
             break;
         }
         let Some((mut step, winner)) = search.forward_step() else {
@@ -533,9 +538,8 @@ pub fn diagnose(
         search.tried.push(c);
         search.kept = t.columns.clone();
         search.current = t;
-        search
-            .in_model
-            .push((c, step.ranking[0].clone(), step.not_separable.clone()));
+        let said = finding(&step.ranking[0], &step.not_separable, &step.look_alikes);
+        search.in_model.push((c, step.ranking[0].clone(), said));
         step.withdrawn = search.retest(c);
         steps.push(step);
     }
@@ -559,7 +563,7 @@ pub fn diagnose(
         |cv: &CrossValidation| (0..cv.folds.len()).map(|j| cv.fold_metrics(j)).collect();
     Ok(Diagnosis {
         steps,
-        findings: in_model.iter().map(|(_, s, alt)| finding(s, alt)).collect(),
+        findings: in_model.iter().map(|(_, _, said)| said.clone()).collect(),
         effects_added: in_model.into_iter().map(|(_, s, _)| s).collect(),
         stopped_at_limit,
         unsupported,
@@ -577,17 +581,20 @@ pub fn diagnose(
 }
 
 /// One sentence for an added effect: a weak or strong rotor by how much, else its name;
-/// with the candidates the data cannot separate from it.
-fn finding(s: &CandidateScore, not_separable: &[String]) -> String {
-    let own = describe(s);
-    if not_separable.is_empty() {
-        own
-    } else {
-        format!(
-            "{own} or {} (not separable with these data)",
+/// with the candidates of its kind the data cannot separate from it and the look-alikes
+/// of other kinds that explain about as much.
+fn finding(s: &CandidateScore, not_separable: &[String], look_alikes: &[String]) -> String {
+    let mut said = describe(s);
+    if !not_separable.is_empty() {
+        said = format!(
+            "{said} or {} (not separable with these data)",
             not_separable.join(" or ")
-        )
+        );
     }
+    if !look_alikes.is_empty() {
+        said = format!("{said}; explains about as much: {}", look_alikes.join(", "));
+    }
+    said
 }
 
 /// "rotor 3 weaker by 9.8 %" for a rotor asymmetry, else the candidate's name.
@@ -620,8 +627,8 @@ struct Search<'a> {
     current: Trial,
     /// Candidates added so far, withdrawn or not (never tried again).
     tried: Vec<usize>,
-    /// Candidates in the current model: index, score when added, not-separable findings.
-    in_model: Vec<(usize, CandidateScore, Vec<String>)>,
+    /// Candidates in the current model: index, score when added, the finding.
+    in_model: Vec<(usize, CandidateScore, String)>,
 }
 
 impl Search<'_> {
@@ -718,14 +725,27 @@ impl Search<'_> {
                 .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
                 .reverse()
         });
+        let confounded = self
+            .confounded_with_completion(&scored)
+            .map(|(i, first)| {
+                if first {
+                    let effect = scored.remove(i);
+                    scored.insert(0, effect);
+                    1
+                } else {
+                    i
+                }
+            })
+            .map(|i| scored[i].0.name.clone());
         let best_ok = scored
             .first()
             .filter(|s| s.0.rejected.is_none())
             .map(|s| s.0.clone());
-        let (look_alikes, not_separable) = best_ok
+        let (mut look_alikes, not_separable) = best_ok
             .as_ref()
             .map(|best| self.alternatives(best, &scored[1..]))
             .unwrap_or_default();
+        look_alikes.extend(confounded);
         let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
         let mut winner = None;
         for (i, (s, c, t)) in scored.into_iter().enumerate() {
@@ -742,6 +762,45 @@ impl Search<'_> {
             withdrawn: Vec::new(),
         };
         Some((step, winner))
+    }
+
+    /// A named effect confounded with the step's winner when that is a completion of
+    /// Eq. 22: accepted, explaining at least 1 − [`DiagnoseOptions::look_alike`] of the
+    /// completion's summed gain, and no longer accepted once the completion is in the
+    /// model (the completion takes its evidence). Returns its index in `scored` and
+    /// whether it goes first: only when it explains clearly more (by more than
+    /// `look_alike`); otherwise the completion keeps its place and the effect is its
+    /// look-alike.
+    fn confounded_with_completion(
+        &self,
+        scored: &[(CandidateScore, usize, Option<Trial>)],
+    ) -> Option<(usize, bool)> {
+        let (first, _, Some(with_completion)) = scored.first()? else {
+            return None;
+        };
+        if first.rejected.is_some() || !first.kind.is_model_completion() {
+            return None;
+        }
+        let look_alike = self.options.look_alike;
+        let (i, (effect, c, _)) = scored.iter().enumerate().skip(1).find(|(_, (s, _, _))| {
+            s.rejected.is_none()
+                && !s.kind.is_model_completion()
+                && !s.kind.is_unspecific()
+                && s.total_gain >= (1.0 - look_alike) * first.total_gain
+        })?;
+        let local = self.local_before(*c, with_completion);
+        let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
+        let (after, _, _) = score(
+            self,
+            &with_completion.columns,
+            *c,
+            with_completion,
+            local,
+            self.level(*c),
+            self.options.min_gain,
+        );
+        after.rejected.as_ref()?;
+        Some((i, effect.total_gain > (1.0 + look_alike) * first.total_gain))
     }
 
     /// Look-alikes of `best` (candidates of other kinds in its group within `look_alike`
@@ -1208,10 +1267,14 @@ mod tests {
         let strong1 = rotor_score(1, 0.102, 499.0);
         assert_eq!(describe(&weak3), "rotor 3 weaker by 9.8 %");
         assert_eq!(describe(&strong1), "rotor 1 stronger by 10.2 %");
-        assert_eq!(finding(&weak3, &[]), "rotor 3 weaker by 9.8 %");
+        assert_eq!(finding(&weak3, &[], &[]), "rotor 3 weaker by 9.8 %");
         assert_eq!(
-            finding(&weak3, &[describe(&strong1)]),
+            finding(&weak3, &[describe(&strong1)], &[]),
             "rotor 3 weaker by 9.8 % or rotor 1 stronger by 10.2 % (not separable with these data)"
+        );
+        assert_eq!(
+            finding(&weak3, &[], &["CG offset".into()]),
+            "rotor 3 weaker by 9.8 %; explains about as much: CG offset"
         );
     }
 }
