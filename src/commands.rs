@@ -336,14 +336,14 @@ pub fn predict(
 ) -> Result<(), Failure> {
     let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
-    let reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
+    let mut reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
         .map_err(|e| Failure::input(e.to_string()))?;
     let mut text = String::from("t,fx,fy,fz,mx,my,mz\n");
     let mut ws = Workspace::default();
-    for chunk in reader {
+    while let Some(chunk) = reader.next_chunk() {
         let chunk = chunk?;
         let y = m
-            .predict_chunk(&chunk, &mut ws)
+            .predict_chunk(chunk, &mut ws)
             .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
         for k in 0..chunk.len() {
             text.push_str(&format!("{}", chunk.t[k]));
@@ -369,11 +369,11 @@ pub fn validate(
     let mut acc = Accumulator::new(&m.structure);
     let mut ws = Workspace::default();
     for log in logs {
-        let reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
+        let mut reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
             .map_err(|e| Failure::input(e.to_string()))?;
-        for chunk in reader {
+        while let Some(chunk) = reader.next_chunk() {
             let chunk = chunk?;
-            acc.push(&m.structure, &chunk, &mut ws)
+            acc.push(&m.structure, chunk, &mut ws)
                 .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
         }
     }

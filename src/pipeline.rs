@@ -160,11 +160,19 @@ fn accumulate_error(source: &LogSource) -> impl Fn(AccumulateError) -> Error + '
     }
 }
 
-/// Opens a log file; its CSV tokeniser gets a thread of its own only with
-/// `spare_thread` (the thread budget allows it), so `threads` bounds the threads at work.
-fn open(path: &std::path::Path, req: &FitRequest, spare_thread: bool) -> Result<LogReader, Error> {
+/// Opens a log file with `parse_threads` CSV parsing threads (capped to 0 when the
+/// request's [`ReadOptions::parse_threads`] is 0).
+fn open(
+    path: &std::path::Path,
+    req: &FitRequest,
+    parse_threads: usize,
+) -> Result<LogReader, Error> {
     let read = ReadOptions {
-        reader_thread: req.read.reader_thread && spare_thread,
+        parse_threads: if req.read.parse_threads == 0 {
+            0
+        } else {
+            parse_threads
+        },
         ..req.read
     };
     Ok(io::open_log(
@@ -175,12 +183,13 @@ fn open(path: &std::path::Path, req: &FitRequest, spare_thread: bool) -> Result<
     )?)
 }
 
-/// Reads one log, routing each sample to the fit or validation statistics.
+/// Reads one log, routing each sample to the fit or validation statistics; `share` is
+/// the number of threads the job may use (see [`stream_log`]).
 fn read_log(
     source: &LogSource,
     role: Role,
     req: &FitRequest,
-    overlap: bool,
+    share: usize,
 ) -> Result<LogStats, Error> {
     let mut fit = Accumulator::new(&req.structure);
     let mut held_out = Accumulator::new(&req.structure);
@@ -207,7 +216,7 @@ fn read_log(
         acc.push(&req.structure, part, &mut ws)
             .map_err(accumulate_error(source))
     };
-    let summary = stream_log(source, req, overlap, |chunk| {
+    let summary = stream_log(source, req, share, |chunk| {
         signals.get_or_insert_with(|| chunk.signals());
         if let Some(w) = spill.as_mut() {
             w.write(chunk)?;
@@ -228,56 +237,95 @@ fn read_log(
 /// Chunks in flight between a log's reader thread and its consumer.
 const CHUNKS_IN_FLIGHT: usize = 4;
 
+/// CSV parsing threads of a job that may use `share` threads: none on one thread (all
+/// work inline); else `share` − 2 beside the consumer and the reader thread, but at least
+/// one, so that two threads give the parsing, the reader's checks and derivations, and
+/// the accumulation three threads (they take turns on the two).
+fn parse_threads(share: usize) -> usize {
+    if share < 2 {
+        0
+    } else {
+        share.saturating_sub(2).max(1)
+    }
+}
+
 /// Feeds the log `source` to `consume` in chunks of [`CHUNK_SAMPLES`] (the last one
 /// shorter) and returns the reader's summary. The chunks do not depend on how the reader
 /// or the caller chunked the samples, so a log gives the same statistics from a file and
-/// from memory. With `overlap`, reading and parsing a file run on a thread of their own
-/// that hands chunks over a bounded channel, so parsing overlaps the consumer's work
-/// (memory stays at [`CHUNKS_IN_FLIGHT`] chunks).
+/// from memory. With a `share` of two threads or more, reading a file runs on a thread
+/// of its own that hands chunks over a bounded channel, so reading overlaps the
+/// consumer's work (memory stays at [`CHUNKS_IN_FLIGHT`] chunks, their buffers reused),
+/// and CSV text is parsed on [`parse_threads`] more.
 fn stream_log(
     source: &LogSource,
     req: &FitRequest,
-    overlap: bool,
+    share: usize,
     mut consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
 ) -> Result<Summary, Error> {
-    let mut feed = |chunk: Result<SampleChunk, io::IoError>| {
-        let chunk = chunk?;
-        count_progress(req, &chunk);
-        consume(&chunk)
+    let mut feed = |chunk: &mut SampleChunk| {
+        count_progress(req, chunk);
+        consume(chunk)
     };
+    let mut cut = Rechunker::default();
     let path = match source {
         LogSource::File(path) => path,
         LogSource::Memory(log) => {
-            for chunk in rechunk(log.chunks().iter().cloned().map(Ok)) {
-                feed(chunk)?;
+            for chunk in log.chunks() {
+                cut.push(chunk, &mut feed)?;
             }
+            cut.finish(&mut feed)?;
             return Ok(Summary::of_memory(log.name(), log.len()));
         }
     };
-    if !overlap {
-        let mut reader = open(path, req, false)?;
-        for chunk in rechunk(reader.by_ref()) {
-            feed(chunk)?;
+    if share < 2 {
+        let mut reader = open(path, req, 0)?;
+        while let Some(chunk) = reader.next_chunk() {
+            cut.push(chunk?, &mut feed)?;
         }
+        cut.finish(&mut feed)?;
         return Ok(reader.summary().clone());
     }
     let (tx, rx) = std::sync::mpsc::sync_channel(CHUNKS_IN_FLIGHT);
+    let (recycle, reuse) = std::sync::mpsc::channel::<SampleChunk>();
     std::thread::scope(|scope| {
         // The reader is opened on its own thread (it is not `Send`).
         let producer = scope.spawn(move || -> Result<Summary, Error> {
-            let mut reader = open(path, req, true)?;
-            for chunk in rechunk(reader.by_ref()) {
-                let failed = chunk.is_err();
-                // A closed channel means the consumer stopped on an error of its own.
-                if tx.send(chunk).is_err() || failed {
+            let mut reader = open(path, req, parse_threads(share))?;
+            // Hands a full chunk over, taking a consumed one back for the next; Err when
+            // the consumer stopped on an error of its own.
+            let mut send = |chunk: &mut SampleChunk| -> Result<(), ()> {
+                let next = reuse.try_recv().unwrap_or_else(|_| empty_like(chunk));
+                tx.send(Ok(std::mem::replace(chunk, next))).map_err(|_| ())
+            };
+            let mut sent = Ok(());
+            while let Some(chunk) = reader.next_chunk() {
+                match chunk {
+                    Ok(c) => sent = cut.push(c, &mut send),
+                    Err(e) => {
+                        // The consumer reports it (or has stopped already).
+                        let _ = tx.send(Err(e));
+                        sent = Err(());
+                    }
+                }
+                if sent.is_err() {
                     break;
                 }
+            }
+            if sent.is_ok() {
+                // Nothing to report if the consumer stopped: it has its own error.
+                let _ = cut.finish(&mut send);
             }
             Ok(reader.summary().clone())
         });
         let mut consumed = Ok(());
         while let Ok(chunk) = rx.recv() {
-            consumed = feed(chunk);
+            consumed = chunk.map_err(Error::from).and_then(|mut c| {
+                feed(&mut c)?;
+                c.clear();
+                // The reader may have finished already; the chunk is then dropped.
+                let _ = recycle.send(c);
+                Ok(())
+            });
             if consumed.is_err() {
                 break;
             }
@@ -296,44 +344,50 @@ fn stream_log(
 /// alone, bit for bit, whoever produced it; and a log of one-sample segments (a sweep,
 /// whose rows are independent test points) costs one update per chunk, not per sample.
 /// Residual autocorrelation lags then run across segment joins, a negligible share of
-/// the lag products.
-fn rechunk<I>(mut chunks: I) -> impl Iterator<Item = Result<SampleChunk, io::IoError>>
-where
-    I: Iterator<Item = Result<SampleChunk, io::IoError>>,
-{
-    let mut pending = SampleChunk::default();
-    // The input chunk being cut, and the first of its samples not yet taken.
-    let mut current: Option<(SampleChunk, usize)> = None;
-    let mut done = false;
-    std::iter::from_fn(move || {
-        loop {
-            if let Some((c, start)) = current.as_mut() {
-                let take = (CHUNK_SAMPLES - pending.len()).min(c.len() - *start);
-                pending.extend_from(c, *start..*start + take);
-                *start += take;
-                if *start == c.len() {
-                    current = None;
-                }
-                if pending.len() == CHUNK_SAMPLES {
-                    let next = empty_like(&pending);
-                    return Some(Ok(std::mem::replace(&mut pending, next)));
-                }
-                continue;
+/// the lag products. The chunk being filled is reused once handed out.
+#[derive(Default)]
+struct Rechunker {
+    pending: SampleChunk,
+}
+
+impl Rechunker {
+    /// Appends the samples of `chunk`, handing every full chunk to `out` (which may
+    /// take it, leaving an empty chunk in its place).
+    fn push<E>(
+        &mut self,
+        chunk: &SampleChunk,
+        out: &mut impl FnMut(&mut SampleChunk) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let mut start = 0;
+        while start < chunk.len() {
+            if self.pending.is_empty() && self.pending.t.capacity() < CHUNK_SAMPLES {
+                // Room for a full chunk, so filling it one sample at a time (a sweep)
+                // does not reallocate.
+                self.pending = empty_like(chunk);
             }
-            if done {
-                return (!pending.is_empty()).then(|| Ok(std::mem::take(&mut pending)));
-            }
-            match chunks.next() {
-                Some(Ok(c)) => current = Some((c, 0)),
-                Some(Err(e)) => {
-                    done = true;
-                    pending.clear();
-                    return Some(Err(e));
-                }
-                None => done = true,
+            let take = (CHUNK_SAMPLES - self.pending.len()).min(chunk.len() - start);
+            self.pending.extend_from(chunk, start..start + take);
+            start += take;
+            if self.pending.len() == CHUNK_SAMPLES {
+                out(&mut self.pending)?;
+                self.pending.clear();
             }
         }
-    })
+        Ok(())
+    }
+
+    /// Hands the last, shorter chunk to `out`, if any samples wait.
+    fn finish<E>(
+        &mut self,
+        out: &mut impl FnMut(&mut SampleChunk) -> Result<(), E>,
+    ) -> Result<(), E> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        out(&mut self.pending)?;
+        self.pending.clear();
+        Ok(())
+    }
 }
 
 /// An empty chunk with the signals of `chunk` and room for [`CHUNK_SAMPLES`] samples in
@@ -438,21 +492,21 @@ impl Splitter {
     }
 }
 
-/// Runs `per_log(job index, path, role, overlap)` for every job on up to `req.threads`
+/// Runs `per_log(job index, path, role, share)` for every job on up to `req.threads`
 /// threads; results come back in job order, so merged statistics do not depend on
-/// scheduling. `overlap` tells a job it may spend a second thread on reading (when there
-/// are at least twice as many threads as logs being worked on).
+/// scheduling. `share` is the number of threads a job may use: `req.threads` divided
+/// among the logs worked on at once (at least 1).
 fn run_jobs<T: Send>(
     jobs: &[(LogSource, Role)],
     req: &FitRequest,
-    per_log: impl Fn(usize, &LogSource, Role, bool) -> Result<T, Error> + Sync,
+    per_log: impl Fn(usize, &LogSource, Role, usize) -> Result<T, Error> + Sync,
 ) -> Result<Vec<T>, Error> {
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<Result<T, Error>>>> =
         Mutex::new((0..jobs.len()).map(|_| None).collect());
     let threads = req.threads.max(1);
     let workers = threads.min(jobs.len().max(1));
-    let overlap = threads >= 2 * workers;
+    let share = (threads / workers).max(1);
     std::thread::scope(|scope| {
         for _ in 0..workers {
             scope.spawn(|| {
@@ -461,7 +515,7 @@ fn run_jobs<T: Send>(
                     let Some((path, role)) = jobs.get(i) else {
                         break;
                     };
-                    let r = per_log(i, path, *role, overlap);
+                    let r = per_log(i, path, *role, share);
                     results.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(r);
                 }
             });
@@ -562,8 +616,8 @@ fn check(req: &FitRequest) -> Result<(), RequestError> {
 pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     check(req)?;
     let jobs = jobs(req);
-    let per_log = run_jobs(&jobs, req, |_, path, role, overlap| {
-        read_log(path, role, req, overlap)
+    let per_log = run_jobs(&jobs, req, |_, path, role, share| {
+        read_log(path, role, req, share)
     })?;
     let n_fit = req.logs.len();
     let mut validation_stats = Accumulator::new(&req.structure);
@@ -742,8 +796,8 @@ fn second_pass(
             Some(start)
         })
         .collect();
-    let mut shares = run_jobs(jobs, req, |i, path, role, overlap| {
-        pass_log(&ctx, path, spills[i].as_ref(), role, overlap, starts[i])
+    let mut shares = run_jobs(jobs, req, |i, path, role, threads| {
+        pass_log(&ctx, path, spills[i].as_ref(), role, threads, starts[i])
     })?;
     let mut residuals: Option<ResidualPass> = None;
     let mut t_offset = [0.0f64; 2];
@@ -857,7 +911,7 @@ fn pass_log(
     source: &LogSource,
     spill: Option<&Spill>,
     role: Role,
-    overlap: bool,
+    threads: usize,
     mut seen: [u64; 2],
 ) -> Result<LogPass, Error> {
     let req = ctx.req;
@@ -929,7 +983,7 @@ fn pass_log(
             split.route(chunk, &mut sink)
         })?,
         None => {
-            stream_log(source, req, overlap, |chunk| split.route(chunk, &mut sink))?;
+            stream_log(source, req, threads, |chunk| split.route(chunk, &mut sink))?;
         }
     }
     split.finish(&mut sink)?;

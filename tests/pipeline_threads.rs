@@ -152,3 +152,42 @@ fn the_spilled_second_pass_matches_the_samples_streamed_from_memory() {
         assert_same_outcome(&two, &two_memory, &format!("two logs, {threads} threads"));
     }
 }
+
+/// The JSON report (as `mrsysid fit --json` writes it) of fitting the shipped log `name`
+/// with diagnosis on `threads` threads, its CSV cut into `range_bytes`-byte ranges.
+fn json_report(name: &str, threads: usize, range_bytes: usize) -> String {
+    let vehicle =
+        Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle");
+    let results = mrsysid::identify::Identification::new(vehicle)
+        .log(root().join("data").join(name))
+        .read_options(ReadOptions {
+            range_bytes,
+            ..ReadOptions::default()
+        })
+        .threads(threads)
+        .diagnose(true)
+        .run()
+        .expect("fit");
+    serde_json::to_string_pretty(&results.report()).expect("json")
+}
+
+#[test]
+fn json_reports_are_identical_for_any_thread_count_and_range_size() {
+    // Tolerance zero (the text compared byte for byte): a CSV row becomes the same f64
+    // values whichever range and thread parse it, and the rows reach the stateful reader
+    // in file order, so nothing downstream can tell. The 769 kB flight is two ranges at
+    // the default 512 KiB, 188 of 4 KiB and ~7 900 of 97 bytes (one or two rows each);
+    // one thread parses inline, two give one parse worker, four two.
+    let name = "quad_x_flight_quadratic_drag.csv";
+    let reference = json_report(name, 1, mrsysid::io::contract_csv::DEFAULT_RANGE_BYTES);
+    assert!(
+        reference.contains("\"diagnosis\""),
+        "report has a diagnosis"
+    );
+    for (threads, range_bytes) in [(2, 1 << 19), (4, 1 << 19), (1, 4096), (2, 4096), (4, 97)] {
+        assert!(
+            json_report(name, threads, range_bytes) == reference,
+            "{threads} threads, {range_bytes}-byte ranges: report differs"
+        );
+    }
+}

@@ -2,19 +2,25 @@
 //! size. A gzip-compressed file (`.csv.gz`, recognised by its magic bytes, not its name)
 //! is decompressed on the fly.
 //!
-//! Tokenising (the `csv` crate splitting bytes into records) runs on its own thread
-//! ([`crate::io::ReadOptions::reader_thread`]; else inline, for a one-thread budget), one
-//! batch of records ahead of the parsing and checking on the caller's thread: the two
-//! cost about the same, so a large file reads in roughly the time of a bare tokenising
-//! pass. Batches arrive in file order and a read error travels after the records before
-//! it, so errors come out in the same order and with the same text as when reading on
-//! one thread. At most [`BATCHES_IN_FLIGHT`] + 2 batches of [`BATCH_RECORDS`] reused
-//! records exist at any time.
+//! Turning text into numbers is the same work for every row, so the file is cut into
+//! byte ranges of whole records ([`crate::io::ReadOptions::range_bytes`], a size that
+//! does not depend on the thread count) and each range is tokenised and parsed on its
+//! own: on [`crate::io::ReadOptions::parse_threads`] worker threads, or on the caller's
+//! thread when that is 0. Parsed ranges come back in file order, so the rows, their
+//! values and every error (with its true line number and field) are the same for any
+//! range size and thread count. A range ends where a record ends: after its last line
+//! feed when it holds no quote character; otherwise (a quoted field may hold a line
+//! end, and a lone CR ends a record too) where the csv tokeniser says its last record
+//! starts. At most [`RANGES_PER_WORKER`] ranges per worker plus one (and the one being
+//! read) exist at any time, their buffers reused.
 
+use std::collections::VecDeque;
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::Path;
-use std::sync::mpsc::{Receiver, Sender, SyncSender, channel, sync_channel};
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 
 use flate2::read::MultiGzDecoder;
 
@@ -23,197 +29,293 @@ use super::error::{ErrorKind, IoError, Location, column};
 use super::mapping::{Mapping, contract_mapping};
 use super::slots::SlotLayout;
 
-/// Records per batch handed from the tokenising thread to the parser.
-pub const BATCH_RECORDS: usize = 256;
+/// Default byte-range size, bytes (512 KiB: about 2 500 rows of a 20-column log; a few
+/// ranges in flight, text and parsed values, stay within a few MB).
+pub const DEFAULT_RANGE_BYTES: usize = 1 << 19;
 
-/// Full batches queued between the tokenising thread and the parser.
-pub const BATCHES_IN_FLIGHT: usize = 4;
+/// Ranges queued or being parsed per worker thread, beyond one more: enough to keep the
+/// workers busy while the caller consumes rows, few enough to bound memory.
+pub const RANGES_PER_WORKER: usize = 2;
 
-/// Percentage of the slots the tokenising thread parses too (the first ones, in slot
-/// order), so that both threads carry about the same work. Tried on the 17-column bench
-/// file (`benches/ingest.rs`): 4, 5 and 6 early slots of 17 read in about 0.52, 0.49 and
-/// 0.52 s; 30 % gives the 5.
-const TOKENISER_SLOT_PERCENT: usize = 30;
-
-/// What the tokenising thread found out about one record besides its fields.
-#[derive(Debug, Clone, Default)]
-struct Early {
-    /// The whole record is valid UTF-8.
-    utf8: bool,
-    /// First slot parsed early that is not a number, with its text.
-    failed: Option<(usize, String)>,
+/// Why a row could not be read; turned into an [`IoError`] with its true line when the
+/// row is consumed.
+#[derive(Debug, Clone)]
+enum Fault {
+    /// The row has this many fields, not the header's count.
+    Width(usize),
+    /// The value of this slot is not a number (its text).
+    NotANumber(usize, String),
+    /// The tokeniser failed (the message).
+    Tokenise(String),
 }
 
-/// Records tokenised in file order, with the values of the early slots; all reused from
-/// batch to batch.
-struct Batch {
-    records: Vec<csv::ByteRecord>,
-    /// Per record, what the early parse found.
-    early: Vec<Early>,
-    /// Values of the early slots, record after record.
+/// One byte range of the file and, once parsed, its rows.
+#[derive(Debug, Default)]
+struct Range {
+    /// The text: whole records.
+    bytes: Vec<u8>,
+    /// Slot values, row after row (a faulty row's values are unspecified).
     values: Vec<f64>,
-    /// Records filled in this batch.
-    len: usize,
-    /// Set on the last batch: end of file, or the read error met after its records.
-    end: Option<Result<(), IoError>>,
+    /// Line of each row counted from the range start (the range's first line is 0).
+    lines: Vec<u64>,
+    /// Faulty rows (row index, fault), in row order.
+    faults: Vec<(usize, Fault)>,
+    /// Line feeds in `bytes`.
+    newlines: u64,
 }
 
-impl Batch {
-    fn new(early_slots: usize) -> Self {
-        Self {
-            records: Vec::new(),
-            early: Vec::new(),
-            values: vec![0.0; BATCH_RECORDS * early_slots],
-            len: 0,
-            end: None,
-        }
-    }
-}
-
-/// Header column of each slot the tokenising thread parses, and the header width.
-struct EarlySlots {
-    columns: Vec<usize>,
+/// What parsing a range needs to know of the file.
+#[derive(Debug)]
+struct Columns {
+    /// Header column of each slot.
+    of_slot: Vec<usize>,
+    /// Header width.
     header_len: usize,
 }
 
-impl EarlySlots {
-    /// Parses the early slots of `record` into `values`, stopping at the first that is not
-    /// a number; a record of the wrong width (or a blank line) is left to the parser.
-    fn parse(&self, record: &csv::ByteRecord, values: &mut [f64], early: &mut Early) {
-        early.failed = None;
-        early.utf8 = false;
-        if record.len() != self.header_len {
-            return;
-        }
-        let text = std::str::from_utf8(record.as_slice()).ok();
-        early.utf8 = text.is_some();
-        for (slot, &col) in self.columns.iter().enumerate() {
-            match parse_column(record, text, col) {
-                Ok(v) => values[slot] = v,
-                Err(text) => {
-                    early.failed = Some((slot, text));
-                    return;
-                }
-            }
-        }
-    }
+/// A csv reader over whole records in memory, with the settings of every read here.
+fn tokeniser(bytes: &[u8]) -> csv::Reader<&[u8]> {
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(bytes)
 }
 
-/// True when the file starts with the gzip magic bytes (RFC 1952): the CSV text is then
-/// decompressed on the fly. Leaves the file at its start.
-fn is_gzip(file: &mut File) -> std::io::Result<bool> {
-    let mut magic = [0u8; 2];
-    let mut n = 0;
-    while n < magic.len() {
-        let k = file.read(&mut magic[n..])?;
-        if k == 0 {
-            break;
+/// The line (0-based, from the start of `bytes`) and byte offset of the first byte of
+/// `record`: the tokeniser places a record after the previous one's terminator, so the
+/// record terminators it skipped (blank lines, the LF of a CRLF) are counted here.
+fn record_start(bytes: &[u8], record: &csv::ByteRecord) -> u64 {
+    let (mut byte, mut line) = record
+        .position()
+        .map_or((0, 1), |p| (p.byte() as usize, p.line()));
+    while let Some(&b) = bytes.get(byte) {
+        match b {
+            b'\n' => line += 1,
+            b'\r' => {}
+            _ => break,
         }
-        n += k;
+        byte += 1;
     }
-    file.seek(SeekFrom::Start(0))?;
-    Ok(n == 2 && magic == [0x1f, 0x8b])
+    line - 1
 }
 
-/// The csv reader of a file with what it needs to fill batches.
-struct Tokeniser {
-    reader: csv::Reader<BufReader<Box<dyn Read + Send>>>,
-    file: String,
-    slots: EarlySlots,
-}
-
-impl Tokeniser {
-    /// Refills `batch` with up to [`BATCH_RECORDS`] records; sets `batch.end` at end of
-    /// file or on a read error (after the records before it).
-    fn fill(&mut self, batch: &mut Batch) {
-        let k = self.slots.columns.len();
-        batch.len = 0;
-        while batch.len < BATCH_RECORDS {
-            let i = batch.len;
-            if batch.records.len() == i {
-                batch.records.push(csv::ByteRecord::new());
-                batch.early.push(Early::default());
-            }
-            match self.reader.read_byte_record(&mut batch.records[i]) {
-                Ok(true) => {
-                    let values = &mut batch.values[i * k..(i + 1) * k];
-                    self.slots
-                        .parse(&batch.records[i], values, &mut batch.early[i]);
-                    batch.len += 1;
-                }
-                Ok(false) => {
-                    batch.end = Some(Ok(()));
-                    break;
-                }
-                Err(e) => {
-                    batch.end = Some(Err(csv_error(&self.file, &e)));
-                    break;
-                }
-            }
-        }
-    }
-
-    /// Tokenising thread: fills batches (reusing those the parser sent back) until end
-    /// of file, a read error, or the parser hung up.
-    fn run(mut self, full: SyncSender<Batch>, empty: Receiver<Batch>) {
-        let k = self.slots.columns.len();
+impl Range {
+    /// Tokenises and parses `bytes` into rows (blank lines skipped, as the csv
+    /// tokeniser does); each row's first failure in slot order is kept as its fault.
+    fn parse(&mut self, columns: &Columns) {
+        self.values.clear();
+        self.lines.clear();
+        self.faults.clear();
+        self.newlines = self.bytes.iter().filter(|&&b| b == b'\n').count() as u64;
+        let k = columns.of_slot.len();
+        let mut reader = tokeniser(&self.bytes);
+        let mut record = csv::ByteRecord::new();
         loop {
-            let mut batch = empty.try_recv().unwrap_or_else(|_| Batch::new(k));
-            self.fill(&mut batch);
-            let last = batch.end.is_some();
-            if full.send(batch).is_err() || last {
-                return;
+            match reader.read_byte_record(&mut record) {
+                Ok(true) => {}
+                Ok(false) => break,
+                Err(e) => {
+                    let line = e.position().map_or(1, |p| p.line());
+                    self.lines.push(line - 1);
+                    self.values.resize(self.values.len() + k, 0.0);
+                    self.faults
+                        .push((self.lines.len() - 1, Fault::Tokenise(e.to_string())));
+                    break;
+                }
+            }
+            if record.len() == 1 && record[0].is_empty() {
+                continue;
+            }
+            let row = self.lines.len();
+            self.lines.push(record_start(&self.bytes, &record));
+            let start = self.values.len();
+            self.values.resize(start + k, 0.0);
+            if record.len() != columns.header_len {
+                self.faults.push((row, Fault::Width(record.len())));
+                continue;
+            }
+            // One UTF-8 check of the whole row instead of one per field; a row that fails
+            // it is checked field by field so the error names the offending field.
+            let text = std::str::from_utf8(record.as_slice()).ok();
+            let values = &mut self.values[start..];
+            for (slot, (&col, v)) in columns.of_slot.iter().zip(values).enumerate() {
+                match parse_column(&record, text, col) {
+                    Ok(x) => *v = x,
+                    Err(t) => {
+                        self.faults.push((row, Fault::NotANumber(slot, t)));
+                        break;
+                    }
+                }
             }
         }
     }
 }
 
-/// Where the parser's batches come from.
-enum Feed {
-    /// A tokenising thread, over a bounded channel, with parsed batches sent back.
-    Thread {
-        batches: Receiver<Batch>,
-        recycle: Sender<Batch>,
-    },
-    /// The parser's own thread, refilling one batch in place.
-    Inline(Box<Tokeniser>),
+/// Offset just past the last whole record of `bytes` (which start at a record start),
+/// if a record ends before the last one begins; see the module notes.
+fn range_end(bytes: &[u8]) -> Option<usize> {
+    if memchr::memchr(b'"', bytes).is_none()
+        && let Some(i) = memchr::memrchr(b'\n', bytes)
+    {
+        return Some(i + 1);
+    }
+    let mut reader = tokeniser(bytes);
+    let mut record = csv::ByteRecord::new();
+    let mut last = 0;
+    while let Ok(true) = reader.read_byte_record(&mut record) {
+        last = record.position().map_or(0, |p| p.byte() as usize);
+    }
+    (last > 0).then_some(last)
+}
+
+/// Cuts the text into ranges of whole records, reading it once in file order.
+struct Cutter {
+    input: Box<dyn Read + Send>,
+    /// Text read past the end of the last range.
+    carry: Vec<u8>,
+    /// End of input reached.
+    eof: bool,
+    /// Nominal range size, bytes (≥ 1).
+    range_bytes: usize,
+}
+
+impl Cutter {
+    /// Reads on until `bytes` holds `want` bytes or the input ends.
+    fn fill(&mut self, bytes: &mut Vec<u8>, want: usize) -> std::io::Result<()> {
+        if bytes.len() < want && !self.eof {
+            let asked = (want - bytes.len()) as u64;
+            bytes.reserve(want - bytes.len());
+            let got = self.input.by_ref().take(asked).read_to_end(bytes)?;
+            self.eof = (got as u64) < asked;
+        }
+        Ok(())
+    }
+
+    /// Fills `bytes` with the next range (about `range_bytes`, more when one record is
+    /// longer); false when the text is used up.
+    fn next(&mut self, bytes: &mut Vec<u8>) -> std::io::Result<bool> {
+        bytes.clear();
+        bytes.append(&mut self.carry);
+        let mut want = self.range_bytes;
+        loop {
+            self.fill(bytes, want)?;
+            if self.eof {
+                return Ok(!bytes.is_empty());
+            }
+            if let Some(end) = range_end(bytes) {
+                self.carry.extend_from_slice(&bytes[end..]);
+                bytes.truncate(end);
+                return Ok(true);
+            }
+            // Doubling keeps the re-tokenising of a long quoted record linear.
+            want = 2 * bytes.len().max(self.range_bytes);
+        }
+    }
+}
+
+/// A range to parse and where to send it back parsed.
+type Job = (Range, SyncSender<Range>);
+
+/// Worker threads parsing ranges; they stop when the job channel closes.
+struct Workers {
+    jobs: Option<SyncSender<Job>>,
+    handles: Vec<JoinHandle<()>>,
+}
+
+impl Workers {
+    fn start(count: usize, columns: &Arc<Columns>) -> std::io::Result<Self> {
+        let (jobs, queue) = sync_channel::<Job>(count * RANGES_PER_WORKER);
+        let queue = Arc::new(Mutex::new(queue));
+        let mut workers = Self {
+            jobs: Some(jobs),
+            handles: Vec::with_capacity(count),
+        };
+        for _ in 0..count {
+            let queue = Arc::clone(&queue);
+            let columns = Arc::clone(columns);
+            let handle = std::thread::Builder::new()
+                .name("csv-parse".into())
+                .spawn(move || {
+                    loop {
+                        // A poisoned lock means another worker panicked: stop too.
+                        let job = match queue.lock() {
+                            Ok(q) => q.recv(),
+                            Err(_) => return,
+                        };
+                        let Ok((mut range, reply)) = job else {
+                            return;
+                        };
+                        range.parse(&columns);
+                        // The reader may be gone (dropped after an error): nothing to do.
+                        let _ = reply.send(range);
+                    }
+                })?;
+            workers.handles.push(handle);
+        }
+        Ok(workers)
+    }
+}
+
+impl Drop for Workers {
+    fn drop(&mut self) {
+        self.jobs = None;
+        for h in self.handles.drain(..) {
+            // A worker that panicked has nothing left to report.
+            let _ = h.join();
+        }
+    }
+}
+
+/// A range in flight: parsed inline on demand, or by a worker.
+enum Pending {
+    Inline(Range),
+    Worker(Receiver<Range>),
 }
 
 /// A CSV file read row by row into the slot layout of its mapping.
 pub struct CsvSource {
     file: String,
-    /// Source of the batches, in file order.
-    feed: Feed,
-    /// The batch being parsed.
-    batch: Batch,
-    /// Next record of `batch`.
-    next: usize,
-    /// End of file (or a read error) was returned.
+    cutter: Cutter,
+    columns: Arc<Columns>,
+    workers: Option<Workers>,
+    /// Ranges cut and not yet read, in file order.
+    pending: VecDeque<Pending>,
+    /// Most ranges in `pending`.
+    in_flight: usize,
+    /// Buffers of ranges read, for reuse.
+    free: Vec<Range>,
+    /// The range being read and its next row and next fault.
+    current: Range,
+    row: usize,
+    fault: usize,
+    /// Line of the first byte of `current` (1-based).
+    first_line: u64,
+    /// A read error met while cutting, returned after the rows before it.
+    read_error: Option<IoError>,
+    /// End of text (or a read error) was returned.
     finished: bool,
-    /// Header column index of each slot.
-    column_of_slot: Vec<usize>,
     /// Header names, for error labels.
     header: Vec<String>,
-    /// Slots parsed on the tokenising thread (the first ones).
-    early_slots: usize,
 }
 
 impl CsvSource {
     /// Opens `path`, reads the header and resolves the mapping (the contract mapping
-    /// when `mapping` is `None`) for a vehicle with `rotors` rotors. With
-    /// `reader_thread`, tokenising runs on a thread of its own.
+    /// when `mapping` is `None`) for a vehicle with `rotors` rotors. The text is cut
+    /// into ranges of about `range_bytes` bytes (≥ 1), parsed on `parse_threads` worker
+    /// threads (0: on the caller's thread).
     pub fn open(
         path: &Path,
         file: &str,
         mapping: Option<&Mapping>,
         rotors: usize,
-        reader_thread: bool,
+        parse_threads: usize,
+        range_bytes: usize,
     ) -> Result<(Self, Mapping, SlotLayout), IoError> {
         let read_error = |e: std::io::Error| {
             IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
         };
         let mut handle = File::open(path).map_err(read_error)?;
-        let source: Box<dyn Read + Send> = if is_gzip(&mut handle).map_err(read_error)? {
+        let input: Box<dyn Read + Send> = if is_gzip(&mut handle).map_err(read_error)? {
             Box::new(MultiGzDecoder::new(BufReader::with_capacity(
                 1 << 16,
                 handle,
@@ -221,14 +323,27 @@ impl CsvSource {
         } else {
             Box::new(handle)
         };
-        let mut reader = csv::ReaderBuilder::new()
-            .flexible(true)
-            .buffer_capacity(1 << 16)
-            .from_reader(BufReader::with_capacity(1 << 16, source));
-        let header_record = reader
-            .byte_headers()
-            .map_err(|e| csv_error(file, &e))?
-            .clone();
+        let mut cutter = Cutter {
+            input,
+            carry: Vec::new(),
+            eof: false,
+            range_bytes: range_bytes.max(1),
+        };
+        // The header is the first record: read on until one more byte follows it (or
+        // the text ends), so that it is whole.
+        let mut first = Vec::new();
+        let mut want = cutter.range_bytes.min(1 << 16);
+        let (header_record, data_start) = loop {
+            cutter.fill(&mut first, want).map_err(read_error)?;
+            let mut reader = tokeniser(&first);
+            let mut record = csv::ByteRecord::new();
+            let found = reader.read_byte_record(&mut record).unwrap_or(false);
+            let end = reader.position().byte() as usize;
+            if cutter.eof || (found && end < first.len()) {
+                break (record, end.min(first.len()));
+            }
+            want = 2 * first.len().max(cutter.range_bytes);
+        };
         if header_record.is_empty() || header_record.iter().all(|f| f.is_empty()) {
             return Err(IoError::new(
                 file,
@@ -237,6 +352,8 @@ impl CsvSource {
                 ErrorKind::Empty,
             ));
         }
+        let first_line = 1 + first[..data_start].iter().filter(|&&b| b == b'\n').count() as u64;
+        cutter.carry = first.split_off(data_start);
         let mut header = Vec::with_capacity(header_record.len());
         for (i, field) in header_record.iter().enumerate() {
             let name = std::str::from_utf8(field).map_err(|_| {
@@ -256,7 +373,7 @@ impl CsvSource {
             None => contract_mapping(&names, rotors, file)?,
         };
         let layout = SlotLayout::resolve(&mapping, rotors, file, false)?;
-        let mut column_of_slot = Vec::with_capacity(layout.len());
+        let mut of_slot = Vec::with_capacity(layout.len());
         for slot in 0..layout.len() {
             let name = layout.source_name(slot);
             let idx = names.iter().position(|h| *h == name).ok_or_else(|| {
@@ -270,92 +387,111 @@ impl CsvSource {
                     )),
                 )
             })?;
-            column_of_slot.push(idx);
+            of_slot.push(idx);
         }
-        let early_slots = column_of_slot.len() * TOKENISER_SLOT_PERCENT / 100;
-        let tokeniser = Tokeniser {
-            reader,
-            file: file.to_string(),
-            slots: EarlySlots {
-                columns: column_of_slot[..early_slots].to_vec(),
-                header_len: header.len(),
-            },
-        };
-        let feed = if reader_thread {
-            let (full_tx, full_rx) = sync_channel(BATCHES_IN_FLIGHT);
-            let (empty_tx, empty_rx) = channel();
-            std::thread::Builder::new()
-                .name("csv-tokeniser".into())
-                .spawn(move || tokeniser.run(full_tx, empty_rx))
-                .map_err(|e| {
-                    IoError::new(
-                        file,
-                        Location::File,
-                        None,
-                        ErrorKind::Read(format!("cannot start the reading thread: {e}")),
-                    )
-                })?;
-            Feed::Thread {
-                batches: full_rx,
-                recycle: empty_tx,
-            }
+        let columns = Arc::new(Columns {
+            of_slot,
+            header_len: header.len(),
+        });
+        let workers = if parse_threads > 0 {
+            Some(Workers::start(parse_threads, &columns).map_err(|e| {
+                IoError::new(
+                    file,
+                    Location::File,
+                    None,
+                    ErrorKind::Read(format!("cannot start the parsing threads: {e}")),
+                )
+            })?)
         } else {
-            Feed::Inline(Box::new(tokeniser))
+            None
         };
         let source = Self {
             file: file.to_string(),
-            feed,
-            batch: Batch::new(early_slots),
-            next: 0,
+            cutter,
+            columns,
+            workers,
+            pending: VecDeque::new(),
+            in_flight: parse_threads * RANGES_PER_WORKER + 1,
+            free: Vec::new(),
+            current: Range::default(),
+            row: 0,
+            fault: 0,
+            first_line,
+            read_error: None,
             finished: false,
-            column_of_slot,
             header,
-            early_slots,
         };
         Ok((source, mapping, layout))
     }
 
-    /// Moves on to the next batch once `batch` is parsed; false at end of file (after a
-    /// read error too: the error is returned once, then the file counts as ended).
-    fn next_batch(&mut self) -> Result<bool, IoError> {
-        if self.finished {
-            return Ok(false);
-        }
-        if let Some(end) = self.batch.end.take() {
-            self.finished = true;
-            return end.map(|()| false);
-        }
-        match &mut self.feed {
-            Feed::Inline(tokeniser) => tokeniser.fill(&mut self.batch),
-            Feed::Thread { batches, recycle } => {
-                let batch = batches.recv().map_err(|_| {
-                    IoError::new(
+    /// Cuts ranges and hands them to the workers until `in_flight` are pending or the
+    /// text is used up (a read error is kept for after the rows before it).
+    fn cut_ahead(&mut self) -> Result<(), IoError> {
+        while self.pending.len() < self.in_flight && self.read_error.is_none() {
+            let mut range = self.free.pop().unwrap_or_default();
+            match self.cutter.next(&mut range.bytes) {
+                Ok(true) => {}
+                Ok(false) => break,
+                Err(e) => {
+                    self.read_error = Some(IoError::new(
                         &self.file,
                         Location::File,
                         None,
-                        ErrorKind::Read("the reading thread stopped".into()),
-                    )
-                })?;
-                let done = std::mem::replace(&mut self.batch, batch);
-                // The tokeniser may have finished already; the batch is then dropped.
-                let _ = recycle.send(done);
+                        ErrorKind::Read(e.to_string()),
+                    ));
+                    break;
+                }
             }
+            let pending = match &self.workers {
+                None => Pending::Inline(range),
+                Some(w) => {
+                    let (reply, result) = sync_channel(1);
+                    let sent = w.jobs.as_ref().map(|jobs| jobs.send((range, reply)));
+                    if !matches!(sent, Some(Ok(()))) {
+                        return Err(self.workers_stopped());
+                    }
+                    Pending::Worker(result)
+                }
+            };
+            self.pending.push_back(pending);
         }
-        self.next = 0;
+        Ok(())
+    }
+
+    fn workers_stopped(&self) -> IoError {
+        IoError::new(
+            &self.file,
+            Location::File,
+            None,
+            ErrorKind::Read("the parsing threads stopped".into()),
+        )
+    }
+
+    /// Moves on to the next parsed range; false at the end of the text (after a read
+    /// error too: the error is returned once, then the file counts as ended).
+    fn next_range(&mut self) -> Result<bool, IoError> {
+        if self.finished {
+            return Ok(false);
+        }
+        self.cut_ahead()?;
+        let range = match self.pending.pop_front() {
+            Some(Pending::Inline(mut range)) => {
+                range.parse(&self.columns);
+                range
+            }
+            Some(Pending::Worker(result)) => result.recv().map_err(|_| self.workers_stopped())?,
+            None => {
+                self.finished = true;
+                return self.read_error.take().map_or(Ok(false), Err);
+            }
+        };
+        self.first_line += self.current.newlines;
+        let done = std::mem::replace(&mut self.current, range);
+        self.free.push(done);
+        self.row = 0;
+        self.fault = 0;
         Ok(true)
     }
-}
-
-fn csv_error(file: &str, e: &csv::Error) -> IoError {
-    let line = e
-        .position()
-        .map_or(Location::File, |p| Location::Line(p.line()));
-    let kind = match e.kind() {
-        csv::ErrorKind::Io(io) => ErrorKind::Read(io.to_string()),
-        csv::ErrorKind::Utf8 { .. } => ErrorKind::Format("not valid UTF-8".into()),
-        _ => ErrorKind::Format(e.to_string()),
-    };
-    IoError::new(file, line, None, kind)
 }
 
 impl RowSource for CsvSource {
@@ -364,63 +500,57 @@ impl RowSource for CsvSource {
     }
 
     fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
-        loop {
-            while self.next == self.batch.len {
-                if !self.next_batch()? {
-                    return Ok(None);
-                }
+        while self.row == self.current.lines.len() {
+            if !self.next_range()? {
+                return Ok(None);
             }
-            let i = self.next;
-            let record = &self.batch.records[i];
-            self.next += 1;
-            let line = record.position().map_or(0, |p| p.line());
-            let loc = Location::Line(line);
-            // A blank line (single empty field) is skipped like the csv crate does.
-            if record.len() == 1 && record[0].is_empty() {
-                continue;
-            }
-            if record.len() != self.header.len() {
-                return Err(IoError::new(
-                    &self.file,
-                    loc,
+        }
+        let i = self.row;
+        self.row += 1;
+        let loc = Location::Line(self.first_line + self.current.lines[i]);
+        if let Some((row, fault)) = self.current.faults.get(self.fault)
+            && *row == i
+        {
+            self.fault += 1;
+            let (field, kind) = match fault {
+                Fault::Width(n) => (
                     None,
                     ErrorKind::Format(format!(
-                        "row has {} fields, header has {}",
-                        record.len(),
+                        "row has {n} fields, header has {}",
                         self.header.len()
                     )),
-                ));
-            }
-            let not_a_number = |slot: usize, text: String| {
-                let col = self.column_of_slot[slot];
-                IoError::new(
-                    &self.file,
-                    loc,
-                    column(&self.header[col]),
-                    ErrorKind::NotANumber(text),
-                )
+                ),
+                Fault::NotANumber(slot, text) => (
+                    column(&self.header[self.columns.of_slot[*slot]]),
+                    ErrorKind::NotANumber(text.clone()),
+                ),
+                Fault::Tokenise(message) => (None, ErrorKind::Format(message.clone())),
             };
-            // The early slots come before the others, so their first failure is the
-            // row's first.
-            let early = &self.batch.early[i];
-            if let Some((slot, text)) = &early.failed {
-                return Err(not_a_number(*slot, text.clone()));
-            }
-            let k = self.early_slots;
-            raw[..k].copy_from_slice(&self.batch.values[i * k..(i + 1) * k]);
-            // One UTF-8 check of the whole row instead of one per field; a row that fails
-            // it is checked field by field so the error names the offending field.
-            let text = if early.utf8 {
-                std::str::from_utf8(record.as_slice()).ok()
-            } else {
-                None
-            };
-            for (slot, &col) in self.column_of_slot.iter().enumerate().skip(k) {
-                raw[slot] = parse_column(record, text, col).map_err(|t| not_a_number(slot, t))?;
-            }
-            return Ok(Some((loc, None)));
+            return Err(IoError::new(&self.file, loc, field, kind));
         }
+        let k = self.columns.of_slot.len();
+        let values = self.current.values.iter().skip(i * k);
+        for (dst, &v) in raw.iter_mut().zip(values) {
+            *dst = v;
+        }
+        Ok(Some((loc, None)))
     }
+}
+
+/// True when the file starts with the gzip magic bytes (RFC 1952): the CSV text is then
+/// decompressed on the fly. Leaves the file at its start.
+fn is_gzip(file: &mut File) -> std::io::Result<bool> {
+    let mut magic = [0u8; 2];
+    let mut n = 0;
+    while n < magic.len() {
+        let k = file.read(&mut magic[n..])?;
+        if k == 0 {
+            break;
+        }
+        n += k;
+    }
+    file.seek(SeekFrom::Start(0))?;
+    Ok(n == 2 && magic == [0x1f, 0x8b])
 }
 
 /// Parses column `col` of `record`, taking it from `text` (the whole record) when the

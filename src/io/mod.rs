@@ -73,8 +73,15 @@ pub struct ReadOptions {
     pub max_gap: f64,
     /// Derivation options (a mapping file's `[derive]` table overrides them).
     pub derive: DeriveOptions,
-    /// Tokenise CSV on a thread of its own (parsing overlaps reading; one more thread).
-    pub reader_thread: bool,
+    /// Worker threads that tokenise and parse the byte ranges of a CSV file (0: parse on
+    /// the reading thread). The values read do not depend on it. The `fit` pipeline sets
+    /// it from its thread budget ([`crate::pipeline::FitRequest::threads`]) unless it is
+    /// 0, which keeps parsing on the reading thread.
+    pub parse_threads: usize,
+    /// Size of the byte ranges a CSV file is cut into for parsing, bytes (a range is
+    /// longer when one record is; values below 1 count as 1). The values read do not
+    /// depend on it; memory holds a few ranges per parse thread.
+    pub range_bytes: usize,
 }
 
 impl Default for ReadOptions {
@@ -83,7 +90,8 @@ impl Default for ReadOptions {
             invalid: InvalidSamples::Error,
             max_gap: 0.1,
             derive: DeriveOptions::default(),
-            reader_thread: true,
+            parse_threads: 1,
+            range_bytes: contract_csv::DEFAULT_RANGE_BYTES,
         }
     }
 }
@@ -254,6 +262,8 @@ pub struct LogReader {
     done: bool,
     failed: bool,
     chunk: SampleChunk,
+    /// `chunk` was lent out by [`LogReader::next_chunk`]: cleared at the next step.
+    lent: bool,
     summary: Summary,
     layout_acc: layout::LayoutAccumulator,
     unit_stats: UnitStats,
@@ -342,8 +352,14 @@ pub fn open_log(
             source, layout, mapping, vehicle, opts, &file, true,
         ));
     }
-    let (source, resolved, layout) =
-        contract_csv::CsvSource::open(path, &file, mapping, rotors, opts.reader_thread)?;
+    let (source, resolved, layout) = contract_csv::CsvSource::open(
+        path,
+        &file,
+        mapping,
+        rotors,
+        opts.parse_threads,
+        opts.range_bytes,
+    )?;
     Ok(LogReader::new(
         Box::new(source),
         layout,
@@ -489,6 +505,7 @@ impl LogReader {
             done: false,
             failed: false,
             chunk,
+            lent: false,
             summary,
             layout_acc: layout::LayoutAccumulator::new(rotors, plan.has_omega_dot),
             unit_stats: UnitStats::default(),
@@ -923,6 +940,7 @@ impl LogReader {
         }
     }
 
+    /// Hands `chunk` out by value, leaving an empty one with room for as many samples.
     fn take_chunk(&mut self) -> SampleChunk {
         // Room for as many samples as the chunk handed out: a full chunk's worth in a
         // long segment, little in a log of short segments (a sweep is one-sample
@@ -931,8 +949,43 @@ impl LogReader {
         let mut next =
             SampleChunk::with_capacity(self.vehicle.rotors, room, self.plan.has_omega_dot);
         prepare_optional(&mut next, &self.layout);
-        self.last_segment = self.segment;
         std::mem::replace(&mut self.chunk, next)
+    }
+
+    /// The next chunk, lent until the next call: the same chunks as the iterator, with
+    /// no allocation per chunk (a sweep's one-sample segments each make a chunk).
+    /// `None` at the end; after an error, `None` too.
+    pub fn next_chunk(&mut self) -> Option<Result<&SampleChunk, IoError>> {
+        match self.advance()? {
+            Ok(()) => Some(Ok(&self.chunk)),
+            Err(e) => Some(Err(e)),
+        }
+    }
+
+    /// Steps to the next chunk, left in `chunk`: `None` at the end or after an error.
+    fn advance(&mut self) -> Option<Result<(), IoError>> {
+        if self.failed {
+            return None;
+        }
+        if self.lent {
+            self.chunk.clear();
+            self.lent = false;
+        }
+        match self.step() {
+            Ok(true) => {
+                self.last_segment = self.segment;
+                self.lent = true;
+                Some(Ok(()))
+            }
+            Ok(false) => {
+                self.failed = true;
+                None
+            }
+            Err(e) => {
+                self.failed = true;
+                Some(Err(e))
+            }
+        }
     }
 
     fn finish_summary(&mut self) {
@@ -941,16 +994,17 @@ impl LogReader {
         self.summary.dropouts = self.source.dropouts().to_vec();
     }
 
-    fn step(&mut self) -> Result<Option<SampleChunk>, IoError> {
+    /// Fills `chunk` with the next chunk (true), or finds the end (false).
+    fn step(&mut self) -> Result<bool, IoError> {
         loop {
             self.emit_ready();
             if self.chunk.len() == CHUNK_SAMPLES {
-                return Ok(Some(self.take_chunk()));
+                return Ok(true);
             }
             if self.segment_closed() && self.next_emit == self.window.len() {
                 // Segment complete: hand out its last partial chunk, then start the next.
                 if !self.chunk.is_empty() {
-                    return Ok(Some(self.take_chunk()));
+                    return Ok(true);
                 }
                 if self.segment_samples > 0 {
                     self.summary.segments += 1;
@@ -971,7 +1025,7 @@ impl LogReader {
                             ));
                         }
                         self.finish_summary();
-                        return Ok(None);
+                        return Ok(false);
                     }
                 }
                 continue;
@@ -1008,19 +1062,12 @@ impl Iterator for LogReader {
     type Item = Result<SampleChunk, IoError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        if self.failed {
-            return None;
-        }
-        match self.step() {
-            Ok(Some(chunk)) => Some(Ok(chunk)),
-            Ok(None) => {
-                self.failed = true;
-                None
+        match self.advance()? {
+            Ok(()) => {
+                self.lent = false;
+                Some(Ok(self.take_chunk()))
             }
-            Err(e) => {
-                self.failed = true;
-                Some(Err(e))
-            }
+            Err(e) => Some(Err(e)),
         }
     }
 }
