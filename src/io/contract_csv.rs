@@ -106,7 +106,7 @@ impl Range {
         self.values.clear();
         self.lines.clear();
         self.faults.clear();
-        self.newlines = self.bytes.iter().filter(|&&b| b == b'\n').count() as u64;
+        self.newlines = memchr::memchr_iter(b'\n', &self.bytes).count() as u64;
         let k = columns.of_slot.len();
         let mut reader = tokeniser(&self.bytes);
         let mut record = csv::ByteRecord::new();
@@ -352,7 +352,7 @@ impl CsvSource {
                 ErrorKind::Empty,
             ));
         }
-        let first_line = 1 + first[..data_start].iter().filter(|&&b| b == b'\n').count() as u64;
+        let first_line = 1 + memchr::memchr_iter(b'\n', &first[..data_start]).count() as u64;
         cutter.carry = first.split_off(data_start);
         let mut header = Vec::with_capacity(header_record.len());
         for (i, field) in header_record.iter().enumerate() {
@@ -529,10 +529,8 @@ impl RowSource for CsvSource {
             return Err(IoError::new(&self.file, loc, field, kind));
         }
         let k = self.columns.of_slot.len();
-        let values = self.current.values.iter().skip(i * k);
-        for (dst, &v) in raw.iter_mut().zip(values) {
-            *dst = v;
-        }
+        let n = k.min(raw.len());
+        raw[..n].copy_from_slice(&self.current.values[i * k..i * k + n]);
         Ok(Some((loc, None)))
     }
 }
