@@ -3,8 +3,19 @@
 //!
 //! Every estimator of this module works on a compressed design: rows of the accumulated
 //! factor R (m ≲ 60 rows), never on the N samples, so these problems are tiny.
+//!
+//! They run on the calling thread (`Par::Seq`): faer's convenience `Mat::qr` and
+//! `Mat::svd` take its global parallelism, a rayon pool on every core, whose idle workers
+//! spin between the thousands of small solves of a diagnosis (2–4 CPU-s per fit, taken
+//! from the parse workers), ignore `--threads`, and round differently with the core count.
 
-use faer::Mat;
+use faer::diag::Diag;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::qr::no_pivoting::factor::{
+    qr_in_place, qr_in_place_scratch, recommended_block_size,
+};
+use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
+use faer::{Mat, Par};
 
 /// Solution of min ‖X θ − z‖ for a small dense X of full column rank.
 #[derive(Debug, Clone)]
@@ -98,8 +109,7 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
     for (i, &zi) in z.iter().enumerate() {
         a[(i, k)] = zi;
     }
-    let qr = a.qr();
-    let r = qr.thin_R();
+    let r = triangular_factor(a);
     let r11 = Mat::from_fn(k, k, |i, j| if j >= i { r[(i, j)] } else { 0.0 });
     let conditioning = conditioning_of(&r11);
     if !conditioning.weak_directions(rank_tol).is_empty() {
@@ -128,10 +138,8 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
 /// Singular values, right singular vectors and VIFs of an equilibrated triangular factor.
 pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
     let k = r11.ncols();
-    let (singular_values, vectors) = match r11.svd() {
-        Ok(svd) => {
-            let s = svd.S().column_vector();
-            let v = svd.V();
+    let (singular_values, vectors) = match singular_value_decomposition(r11) {
+        Ok((s, v)) => {
             let mut idx: Vec<usize> = (0..k).collect();
             idx.sort_by(|&a, &b| s[b].total_cmp(&s[a]));
             (
@@ -158,6 +166,44 @@ pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
         vectors,
         vif,
     }
+}
+
+/// The upper-triangular factor R of a Householder QR of `a` (rows ≥ columns), on this
+/// thread.
+fn triangular_factor(mut a: Mat<f64>) -> Mat<f64> {
+    let (m, n) = a.shape();
+    let block = recommended_block_size::<f64>(m, n);
+    let mut coeff = Mat::<f64>::zeros(block, m.min(n));
+    let scratch = qr_in_place_scratch::<f64>(m, n, block, Par::Seq, Default::default());
+    qr_in_place(
+        a.as_mut(),
+        coeff.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    );
+    Mat::from_fn(n, n, |i, j| if j >= i { a[(i, j)] } else { 0.0 })
+}
+
+/// Singular values (unsorted) and right singular vectors (columns) of square `r`, on this
+/// thread.
+fn singular_value_decomposition(
+    r: &Mat<f64>,
+) -> Result<(Vec<f64>, Mat<f64>), faer::linalg::svd::SvdError> {
+    let k = r.ncols();
+    let (mut u, mut v, mut s) = (Mat::zeros(k, k), Mat::zeros(k, k), Diag::zeros(k));
+    let full = ComputeSvdVectors::Full;
+    let scratch = svd_scratch::<f64>(k, k, full, full, Par::Seq, Default::default());
+    svd(
+        r.as_ref(),
+        s.as_mut(),
+        Some(u.as_mut()),
+        Some(v.as_mut()),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )?;
+    Ok(((0..k).map(|i| s[i]).collect(), v))
 }
 
 /// x solving U x = b for upper-triangular U.
