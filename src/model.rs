@@ -1349,6 +1349,13 @@ fn vortex_ring_onset(descent: f64, vh: f64, nu0: f64) -> f64 {
 
 /// The values of signal `s` for the `n` samples of `chunk`; computed signals live at
 /// `offset` in `signals`.
+/// Smallest and largest of `values` ((∞, −∞) when empty).
+fn range_of(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+        (lo.min(x), hi.max(x))
+    })
+}
+
 fn signal_slice<'a>(
     s: Signal,
     chunk: &'a SampleChunk,
@@ -1523,6 +1530,34 @@ impl Workspace {
     /// Smallest and largest of u, v, w, p, q, r (index 0..6) in the last assembled chunk.
     pub fn motion_range(&self, k: usize) -> (f64, f64) {
         self.motion[k]
+    }
+
+    /// Rows `rows` (ascending sample indices) of `chunk`, last assembled into `self` with
+    /// `n_columns` columns, copied into `into` as if that part of `chunk` alone had been
+    /// assembled: regressors, outputs, and the measured and motion ranges (signals are
+    /// not copied).
+    pub fn gather(&self, chunk: &SampleChunk, rows: &[usize], n_columns: usize, into: &mut Self) {
+        let m = rows.len();
+        into.prepare(m, n_columns, 0);
+        let cap = into.capacity;
+        let pick = |src: &[f64], dst: &mut [f64]| {
+            dst.iter_mut().zip(rows).for_each(|(d, &i)| *d = src[i]);
+        };
+        for j in 0..n_columns {
+            pick(self.column(j), &mut into.columns[j * cap..j * cap + m]);
+        }
+        for axis in Axis::ALL {
+            let a = axis as usize;
+            pick(self.output(axis), &mut into.outputs[a * cap..a * cap + m]);
+            into.measured[a] = match chunk.wrench[a].get(..chunk.len()) {
+                Some(z) => range_of(rows.iter().map(|&i| z[i])),
+                None => (0.0, 0.0),
+            };
+        }
+        for k in 0..3 {
+            into.motion[k] = range_of(rows.iter().map(|&i| chunk.velocity[k][i]));
+            into.motion[3 + k] = range_of(rows.iter().map(|&i| chunk.rates[k][i]));
+        }
     }
 
     /// Measured output of `axis` minus the known terms, for the last assembled chunk.

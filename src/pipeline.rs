@@ -931,7 +931,7 @@ fn pass_log(
                 .map_or_else(Vec::new, |e| e.regions.accumulators(&e.structure))
         }),
     };
-    let (mut ws, mut active_ws) = (Workspace::default(), Workspace::default());
+    let (mut ws, mut active_ws, mut part_ws) = Default::default();
     let mut split = Splitter::new(role);
     let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), Error> {
         let k = usize::from(to_validation);
@@ -943,9 +943,10 @@ fn pass_log(
                 .push(
                     &ext.structure,
                     part,
+                    &ws,
                     &mut share.local[k],
-                    &mut ws,
                     &mut active_ws,
+                    &mut part_ws,
                 )
                 .map_err(accumulate_error(source))?;
         }

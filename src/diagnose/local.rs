@@ -83,15 +83,19 @@ impl LocalRegions {
     }
 
     /// Pushes the samples of `chunk` where each region's candidate acts into that
-    /// region's accumulator in `into` (one per region, over `extended`); `ws` holds the
-    /// extended regressors, `active_ws` the activity signals (both reused across chunks).
+    /// region's accumulator in `into` (one per region, over `extended`). `assembled` must
+    /// hold `chunk` assembled by `extended`: the active rows are gathered from it rather
+    /// than assembled again (every regressor is a function of its own sample, so this is
+    /// the same as assembling the active part). `active_ws` takes the activity signals,
+    /// `part_ws` the gathered rows (both reused across chunks).
     pub fn push(
         &self,
         extended: &ModelStructure,
         chunk: &SampleChunk,
+        assembled: &Workspace,
         into: &mut [Accumulator],
-        ws: &mut Workspace,
         active_ws: &mut Workspace,
+        part_ws: &mut Workspace,
     ) -> Result<(), AccumulateError> {
         if self.is_empty() || chunk.is_empty() {
             return Ok(());
@@ -99,35 +103,18 @@ impl LocalRegions {
         self.activity
             .assemble(chunk, active_ws)
             .map_err(AccumulateError::from)?;
+        let mut rows = Vec::with_capacity(chunk.len());
         for (k, acc) in into.iter_mut().enumerate() {
-            let values = active_ws.column(k);
-            let part = active_part(chunk, values, self.thresholds[k]);
-            if !part.is_empty() {
-                acc.push(extended, &part, ws)?;
+            let threshold = self.thresholds[k];
+            rows.clear();
+            rows.extend((0..chunk.len()).filter(|&i| active_ws.column(k)[i].abs() >= threshold));
+            if !rows.is_empty() {
+                assembled.gather(chunk, &rows, extended.columns.len(), part_ws);
+                acc.push_assembled(part_ws)?;
             }
         }
         Ok(())
     }
-}
-
-/// The samples of `chunk` whose activity `values` reach `threshold`, in order.
-fn active_part(chunk: &SampleChunk, values: &[f64], threshold: f64) -> SampleChunk {
-    let mut part = SampleChunk::default();
-    let mut start = None;
-    for (i, v) in values.iter().enumerate() {
-        match (v.abs() >= threshold, start) {
-            (true, None) => start = Some(i),
-            (false, Some(s)) => {
-                part.extend_from(chunk, s..i);
-                start = None;
-            }
-            _ => {}
-        }
-    }
-    if let Some(s) = start {
-        part.extend_from(chunk, s..values.len());
-    }
-    part
 }
 
 /// The held-out statistics of one local candidate over the cross-validation folds.

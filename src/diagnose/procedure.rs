@@ -1180,10 +1180,19 @@ pub fn diagnose_chunks(
         }
     }
     let mut local_tests = set.regions.accumulators(&extended);
-    let mut active_ws = crate::model::Workspace::default();
+    let (mut active_ws, mut part_ws) = Default::default();
     for c in validation_data {
-        set.regions
-            .push(&extended, c, &mut local_tests, &mut ws, &mut active_ws)?;
+        extended
+            .assemble(c, &mut ws)
+            .map_err(AccumulateError::from)?;
+        set.regions.push(
+            &extended,
+            c,
+            &ws,
+            &mut local_tests,
+            &mut active_ws,
+            &mut part_ws,
+        )?;
     }
     let folds = Folds::holdout("validation data", fa.clone(), va);
     let local: Vec<LocalFolds> = set
