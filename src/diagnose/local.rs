@@ -105,9 +105,7 @@ impl LocalRegions {
             .map_err(AccumulateError::from)?;
         let mut rows = Vec::with_capacity(chunk.len());
         for (k, acc) in into.iter_mut().enumerate() {
-            let threshold = self.thresholds[k];
-            rows.clear();
-            rows.extend((0..chunk.len()).filter(|&i| active_ws.column(k)[i].abs() >= threshold));
+            active_rows(active_ws.column(k), self.thresholds[k], &mut rows);
             if !rows.is_empty() {
                 assembled.gather(chunk, &rows, extended.columns.len(), part_ws);
                 acc.push_assembled(part_ws)?;
@@ -115,6 +113,12 @@ impl LocalRegions {
         }
         Ok(())
     }
+}
+
+/// The indices (in order) of the samples whose activity `values` reach `threshold`.
+fn active_rows(values: &[f64], threshold: f64, rows: &mut Vec<usize>) {
+    rows.clear();
+    rows.extend((0..values.len()).filter(|&i| values[i].abs() >= threshold));
 }
 
 /// The held-out statistics of one local candidate over the cross-validation folds.
@@ -148,22 +152,15 @@ impl LocalFolds {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sample::Sample;
 
     #[test]
-    fn the_active_part_keeps_the_samples_at_or_above_the_threshold_in_order() {
-        let mut chunk = SampleChunk::default();
-        for k in 0..6 {
-            chunk.push(&Sample {
-                t: k as f64,
-                omega: vec![1.0; 4],
-                ..Sample::default()
-            });
-        }
+    fn the_active_rows_are_the_samples_at_or_above_the_threshold_in_order() {
         let values = [0.0, 0.02, -0.01, 0.005, 0.0, 0.5];
-        let part = active_part(&chunk, &values, 0.01);
-        // |value| ≥ 0.01: samples 1, 2 (a run) and 5 (a run at the end).
-        assert_eq!(part.t, vec![1.0, 2.0, 5.0]);
-        assert!(active_part(&chunk, &values, 1.0).is_empty());
+        let mut rows = vec![9];
+        active_rows(&values, 0.01, &mut rows);
+        // |value| ≥ 0.01: samples 1, 2 (a run) and 5 (at the end).
+        assert_eq!(rows, vec![1, 2, 5]);
+        active_rows(&values, 1.0, &mut rows);
+        assert!(rows.is_empty());
     }
 }
