@@ -757,8 +757,21 @@ struct LogPass {
     span: [(f64, f64); 2],
     /// Candidate-effect statistics (fitted, held-out samples), when diagnosing.
     candidates: Option<[Accumulator; 2]>,
-    /// The same over the samples where each local candidate acts, one per region.
-    local: [Vec<Accumulator>; 2],
+    /// The same over the samples where each local candidate acts, one per region, from
+    /// the kind [`local_kind`] names (empty for a validation log).
+    local: Vec<Accumulator>,
+}
+
+/// Which samples of a log (fit: false, held-out: true) the local-region statistics are
+/// built from: the held-out part of a single fit log, every sample of each of several
+/// fit logs (each is left out in turn), none of a validation log (it reports, never
+/// decides). [`local_folds`] uses nothing else.
+fn local_kind(role: Role) -> Option<bool> {
+    match role {
+        Role::Fit => Some(false),
+        Role::Split(_) => Some(true),
+        Role::Validation => None,
+    }
 }
 
 /// Streams the data again (each log file from its spill, in job order with `jobs`):
@@ -823,7 +836,7 @@ fn second_pass(
     let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
         return Ok(());
     };
-    let local_parts: Vec<[Vec<Accumulator>; 2]> = shares
+    let local_parts: Vec<Vec<Accumulator>> = shares
         .iter_mut()
         .take(req.logs.len())
         .map(|s| std::mem::take(&mut s.local))
@@ -839,7 +852,7 @@ fn second_pass(
     for [_, held_out] in &per_log[n_fit..] {
         merge(&mut report, held_out)?;
     }
-    let local = local_folds(&ext.regions, &local_parts, &folds)?;
+    let local = local_folds(&ext.regions, &local_parts, &folds);
     options.variance_inflation = options.variance_inflation.max(inflation);
     let stats = CandidateStatistics {
         extended: &ext.structure,
@@ -856,30 +869,21 @@ fn second_pass(
 }
 
 /// The held-out statistics where each local candidate acts, per fold as [`arrange`]
-/// builds the folds: the hold-out part of a single log, or each whole log left out.
-/// A region with no active held-out sample in some fold is left out (judged globally).
+/// builds the folds (`parts`: each fit log's local statistics, see [`local_kind`]): the
+/// hold-out part of a single log, or each whole log left out. A region with no active
+/// held-out sample in some fold is left out (judged globally).
 fn local_folds(
     regions: &LocalRegions,
-    parts: &[[Vec<Accumulator>; 2]],
+    parts: &[Vec<Accumulator>],
     folds: &Folds,
-) -> Result<Vec<LocalFolds>, Error> {
-    let mut out = Vec::new();
-    for (r, &candidate) in regions.candidates.iter().enumerate() {
-        let tests = if let [single] = parts {
-            vec![single[1][r].clone()]
-        } else {
-            parts
-                .iter()
-                .map(|log| {
-                    let mut a = log[0][r].clone();
-                    merge(&mut a, &log[1][r])?;
-                    Ok(a)
-                })
-                .collect::<Result<Vec<_>, Error>>()?
-        };
-        out.extend(LocalFolds::new(candidate, folds, tests));
-    }
-    Ok(out)
+) -> Vec<LocalFolds> {
+    let regions = regions.candidates.iter().enumerate();
+    regions
+        .filter_map(|(r, &candidate)| {
+            let tests = parts.iter().map(|log| log[r].clone()).collect();
+            LocalFolds::new(candidate, folds, tests)
+        })
+        .collect()
 }
 
 /// Appends a log's plot series after the logs before it on the plots' time axis
@@ -925,11 +929,10 @@ fn pass_log(
                 Accumulator::new(&e.structure),
             ]
         }),
-        local: [0, 1].map(|_| {
-            ctx.extended
-                .as_ref()
-                .map_or_else(Vec::new, |e| e.regions.accumulators(&e.structure))
-        }),
+        local: match (&ctx.extended, local_kind(role)) {
+            (Some(e), Some(_)) => e.regions.accumulators(&e.structure),
+            _ => Vec::new(),
+        },
     };
     let (mut ws, mut active_ws, mut part_ws) = Default::default();
     let mut split = Splitter::new(role);
@@ -939,16 +942,18 @@ fn pass_log(
             acc[k]
                 .push(&ext.structure, part, &mut ws)
                 .map_err(accumulate_error(source))?;
-            ext.regions
-                .push(
-                    &ext.structure,
-                    part,
-                    &ws,
-                    &mut share.local[k],
-                    &mut active_ws,
-                    &mut part_ws,
-                )
-                .map_err(accumulate_error(source))?;
+            if local_kind(role) == Some(to_validation) {
+                ext.regions
+                    .push(
+                        &ext.structure,
+                        part,
+                        &ws,
+                        &mut share.local,
+                        &mut active_ws,
+                        &mut part_ws,
+                    )
+                    .map_err(accumulate_error(source))?;
+            }
         }
         // Leaves the base regressors of `part` in `ws` for the plotted predictions.
         if to_validation {
