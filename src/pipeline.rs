@@ -2,7 +2,9 @@
 //! statistics (fit data and hold-out validation data), estimate (seed §5), then a
 //! streaming second pass for residual diagnostics and plot series. The text of a log
 //! file is read once: the first pass spills its parsed chunks to a temporary binary file
-//! that the second pass streams back ([`crate::spill`] explains the choice).
+//! that the second pass streams back ([`crate::spill`] explains the choice), in segments
+//! of `SEGMENT_CHUNKS` chunks passed on all the log's threads and merged in order
+//! (`pass_log`): results depend on the segment size, never on `--threads`.
 //!
 //! Hold-out: without explicit validation logs, each log's time axis is cut into
 //! contiguous segments of [`Holdout::segment_seconds`] from its first sample, and every
@@ -145,12 +147,18 @@ struct LogStats {
     signals: Option<Signals>,
     /// The log's parsed chunks for the second pass (log files only, when it runs).
     spill: Option<Spill>,
+    /// Time the hold-out segments count from (the first sample's), s.
+    t0: Option<f64>,
 }
 
-/// What the second pass needs to know of a log from the first: the samples routed to
-/// fit and to validation (for plot decimation), in job order.
+/// What the second pass needs to know of a log from the first, in job order.
 #[derive(Debug, Clone, Copy)]
-struct LogCounts([u64; 2]);
+struct LogCounts {
+    /// Samples routed to fit and to validation (for plot decimation).
+    kinds: [u64; 2],
+    /// Time the log's hold-out segments count from, s.
+    t0: Option<f64>,
+}
 
 /// The error of accumulating a chunk of the log `source`.
 fn accumulate_error(source: &LogSource) -> impl Fn(AccumulateError) -> Error + '_ {
@@ -197,10 +205,10 @@ fn read_log(
     let mut screening = Thinned::new(SCREENING_SAMPLES);
     let keep_screening = req.diagnose.is_some();
     let mut ws = Workspace::default();
-    let mut split = Splitter::new(role);
+    let mut split = Splitter::new(role, None);
     let mut spill = match source {
         LogSource::File(_) if req.second_pass || req.diagnose.is_some() => {
-            Some(SpillWriter::create()?)
+            Some(SpillWriter::create(SEGMENT_CHUNKS)?)
         }
         _ => None,
     };
@@ -218,10 +226,11 @@ fn read_log(
     };
     let summary = stream_log(source, req, share, |chunk| {
         signals.get_or_insert_with(|| chunk.signals());
+        let kinds = split.route(chunk, &mut sink)?;
         if let Some(w) = spill.as_mut() {
-            w.write(chunk)?;
+            w.write(chunk, kinds)?;
         }
-        split.route(chunk, &mut sink)
+        Ok(())
     })?;
     split.finish(&mut sink)?;
     Ok(LogStats {
@@ -231,6 +240,7 @@ fn read_log(
         summary,
         signals,
         spill: spill.map(SpillWriter::finish).transpose()?,
+        t0: split.t0,
     })
 }
 
@@ -433,10 +443,12 @@ struct Splitter {
 }
 
 impl Splitter {
-    fn new(role: Role) -> Self {
+    /// A splitter whose hold-out segments count from `t0` (s), or from the first sample
+    /// it routes when `None`.
+    fn new(role: Role, t0: Option<f64>) -> Self {
         Self {
             role,
-            t0: None,
+            t0,
             parts: Default::default(),
         }
     }
@@ -444,19 +456,21 @@ impl Splitter {
     /// Routes the samples of `chunk` to `sink(part, to_validation)`: whole chunks when
     /// the log has one role, else runs of one kind gathered into chunks of at least
     /// [`CHUNK_SAMPLES`] (time order kept within each kind). Call [`Splitter::finish`]
-    /// after the last chunk.
+    /// after the last chunk. Returns the chunk's samples of each kind (fit, validation).
     fn route(
         &mut self,
         chunk: &SampleChunk,
         sink: &mut impl FnMut(&SampleChunk, bool) -> Result<(), Error>,
-    ) -> Result<(), Error> {
+    ) -> Result<[u64; 2], Error> {
+        let n = chunk.len() as u64;
         let holdout = match self.role {
-            Role::Fit => return sink(chunk, false),
-            Role::Validation => return sink(chunk, true),
+            Role::Fit => return sink(chunk, false).map(|()| [n, 0]),
+            Role::Validation => return sink(chunk, true).map(|()| [0, n]),
             Role::Split(h) => h,
         };
+        let mut kinds = [0u64; 2];
         if chunk.is_empty() {
-            return Ok(());
+            return Ok(kinds);
         }
         let t0 = *self.t0.get_or_insert(chunk.t[0]);
         let mut start = 0;
@@ -466,6 +480,7 @@ impl Splitter {
             while end < chunk.len() && holdout.holds_out(chunk.t[end], t0) == kind {
                 end += 1;
             }
+            kinds[usize::from(kind)] += (end - start) as u64;
             let part = &mut self.parts[usize::from(kind)];
             part.extend_from(chunk, start..end);
             if part.len() >= CHUNK_SAMPLES {
@@ -474,7 +489,7 @@ impl Splitter {
             }
             start = end;
         }
-        Ok(())
+        Ok(kinds)
     }
 
     /// Hands over the samples still waiting.
@@ -631,7 +646,10 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     }
     let counts: Vec<LogCounts> = per_log
         .iter()
-        .map(|s| LogCounts([s.fit.count(), s.held_out.count()]))
+        .map(|s| LogCounts {
+            kinds: [s.fit.count(), s.held_out.count()],
+            t0: s.t0,
+        })
         .collect();
     let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit]
         .iter()
@@ -694,6 +712,11 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     }
     Ok(outcome)
 }
+
+/// Chunks per segment of a log's second pass ([`pass_log`]): 64 chunks cut a 1 M-sample
+/// log into 16 segments for the threads to share, while a log of up to 65 536 samples
+/// is one segment.
+const SEGMENT_CHUNKS: usize = 64;
 
 /// Points kept per plotted series: buckets of the whole run keep their first sample.
 const PLOT_POINTS: u64 = 4000;
@@ -797,20 +820,25 @@ fn second_pass(
             (Some(options), Some(s)) => Some(Extended::new(req, &out.fit, s, screening, options)?),
             _ => None,
         },
-        strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.0[k]).sum())),
+        strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.kinds[k]).sum())),
     };
     // Samples of each kind before each log: its first sample's place in the decimation.
     let starts: Vec<[u64; 2]> = counts
         .iter()
         .scan([0u64; 2], |seen, c| {
             let start = *seen;
-            seen[0] += c.0[0];
-            seen[1] += c.0[1];
+            seen[0] += c.kinds[0];
+            seen[1] += c.kinds[1];
             Some(start)
         })
         .collect();
     let mut shares = run_jobs(jobs, req, |i, path, role, threads| {
-        pass_log(&ctx, path, spills[i].as_ref(), role, threads, starts[i])
+        let at = Start {
+            seen: starts[i],
+            in_log: [0; 2],
+            t0: counts[i].t0,
+        };
+        pass_log(&ctx, path, spills[i].as_ref(), role, threads, at)
     })?;
     let mut residuals: Option<ResidualPass> = None;
     let mut t_offset = [0.0f64; 2];
@@ -908,61 +936,236 @@ fn lay_end_to_end(
     }
 }
 
-/// The second pass over one log, from its `spill` when there is one; `seen` counts the
-/// samples of each kind in the logs before it.
+/// Where a segment of a log's second pass starts.
+#[derive(Debug, Clone, Copy)]
+struct Start {
+    /// Samples of each kind (fit, validation) before it, in this log and the logs before.
+    seen: [u64; 2],
+    /// The same in this log only.
+    in_log: [u64; 2],
+    /// Time the log's hold-out segments count from, s.
+    t0: Option<f64>,
+}
+
+/// The second pass over one log, from its `spill` when there is one, in segments of
+/// [`SEGMENT_CHUNKS`] chunks: each segment is passed from a fresh state (on up to
+/// `threads` threads when read from a spill) and the segments' shares are merged in
+/// order, so the result depends on the segment size only, never on the thread count or
+/// on whether the log came from a file or from memory.
 fn pass_log(
     ctx: &PassContext,
     source: &LogSource,
     spill: Option<&Spill>,
     role: Role,
     threads: usize,
-    mut seen: [u64; 2],
+    at: Start,
 ) -> Result<LogPass, Error> {
-    let req = ctx.req;
-    let mut share = LogPass {
-        residuals: ctx.residuals.clone(),
-        series: Default::default(),
-        span: [(f64::NAN, f64::NAN); 2],
-        candidates: ctx.extended.as_ref().map(|e| {
-            [
-                Accumulator::new(&e.structure),
-                Accumulator::new(&e.structure),
-            ]
-        }),
-        local: match (&ctx.extended, local_kind(role)) {
-            (Some(e), Some(_)) => e.regions.accumulators(&e.structure),
-            _ => Vec::new(),
-        },
+    let mut share = LogPass::empty(ctx, role);
+    let mut append = |part: LogPass| share.append(part).map_err(accumulate_error(source));
+    match spill {
+        Some(spill) => {
+            let segments = spill.segments();
+            let pass_segment = |s: usize| {
+                let in_log = segments[s].before;
+                let seen = [0, 1].map(|k| at.seen[k] + in_log[k]);
+                let start = Start { seen, in_log, ..at };
+                let mut pass = SegmentPass::new(ctx, source, role, start);
+                spill.stream_segment(s, |chunk| {
+                    count_progress(ctx.req, chunk);
+                    pass.push(chunk)
+                })?;
+                pass.finish()
+            };
+            run_in_order(segments.len(), threads, pass_segment, &mut append)?;
+        }
+        None => {
+            let mut pass = SegmentPass::new(ctx, source, role, at);
+            let mut chunks = 0;
+            stream_log(source, ctx.req, threads, |chunk| {
+                if chunks == SEGMENT_CHUNKS {
+                    let next = SegmentPass::new(ctx, source, role, pass.next_start());
+                    append(std::mem::replace(&mut pass, next).finish()?)?;
+                    chunks = 0;
+                }
+                chunks += 1;
+                pass.push(chunk)
+            })?;
+            append(pass.finish()?)?;
+        }
+    }
+    share.times_from_start();
+    Ok(share)
+}
+
+/// Runs `task(i)` for i in 0..n on up to `threads` threads, handing the results to
+/// `fold` in index order as they come in (tasks are taken in index order, so at most
+/// about `threads` results wait). The first error in index order is returned.
+fn run_in_order<T: Send>(
+    n: usize,
+    threads: usize,
+    task: impl Fn(usize) -> Result<T, Error> + Sync,
+    fold: &mut (impl FnMut(T) -> Result<(), Error> + Send),
+) -> Result<(), Error> {
+    struct Done<'f, T, F> {
+        next: usize,
+        waiting: std::collections::BTreeMap<usize, T>,
+        fold: &'f mut F,
+        failed: Option<(usize, Error)>,
+    }
+    let done = Mutex::new(Done {
+        next: 0,
+        waiting: Default::default(),
+        fold,
+        failed: None,
+    });
+    let take = AtomicUsize::new(0);
+    let work = || {
+        loop {
+            let i = take.fetch_add(1, Ordering::Relaxed);
+            let stop = |d: &Done<T, _>| d.failed.as_ref().is_some_and(|f| f.0 < i);
+            if i >= n || stop(&done.lock().unwrap_or_else(|e| e.into_inner())) {
+                break;
+            }
+            let result = task(i);
+            let mut d = done.lock().unwrap_or_else(|e| e.into_inner());
+            let d = &mut *d;
+            match result {
+                Ok(r) => {
+                    d.waiting.insert(i, r);
+                }
+                Err(e) => {
+                    if d.failed.as_ref().is_none_or(|f| i < f.0) {
+                        d.failed = Some((i, e));
+                    }
+                }
+            }
+            while d.failed.is_none() {
+                let Some(r) = d.waiting.remove(&d.next) else {
+                    break;
+                };
+                d.next += 1;
+                if let Err(e) = (d.fold)(r) {
+                    d.failed = Some((d.next - 1, e));
+                }
+            }
+        }
     };
-    let (mut ws, mut active_ws, mut part_ws) = Default::default();
-    let mut split = Splitter::new(role);
-    let mut sink = |part: &SampleChunk, to_validation: bool| -> Result<(), Error> {
+    let workers = threads.clamp(1, n.max(1));
+    std::thread::scope(|scope| {
+        for _ in 1..workers {
+            scope.spawn(work);
+        }
+        work();
+    });
+    let done = done.into_inner().unwrap_or_else(|e| e.into_inner());
+    match done.failed {
+        Some((_, e)) => Err(e),
+        None => Ok(()),
+    }
+}
+
+/// The second pass over one segment of a log.
+struct SegmentPass<'a> {
+    source: &'a LogSource,
+    split: Splitter,
+    state: SegmentState<'a>,
+}
+
+/// What a segment's sink works on (apart from its splitter).
+struct SegmentState<'a> {
+    ctx: &'a PassContext<'a>,
+    role: Role,
+    share: LogPass,
+    /// Samples of each kind before the segment's next sample (plot decimation).
+    seen: [u64; 2],
+    /// Samples of each kind in the log before the segment's next sample.
+    in_log: [u64; 2],
+    /// The same before the segment's first sample (error positions count from them).
+    first: [u64; 2],
+    ws: Workspace,
+    active_ws: Workspace,
+    part_ws: Workspace,
+}
+
+impl<'a> SegmentPass<'a> {
+    fn new(ctx: &'a PassContext<'a>, source: &'a LogSource, role: Role, at: Start) -> Self {
+        Self {
+            source,
+            split: Splitter::new(role, at.t0),
+            state: SegmentState {
+                ctx,
+                role,
+                share: LogPass::empty(ctx, role),
+                seen: at.seen,
+                in_log: at.in_log,
+                first: at.in_log,
+                ws: Workspace::default(),
+                active_ws: Workspace::default(),
+                part_ws: Workspace::default(),
+            },
+        }
+    }
+
+    /// Where the segment after this one starts (call after its last chunk).
+    fn next_start(&self) -> Start {
+        let waiting = |k: usize| self.split.parts[k].len() as u64;
+        Start {
+            seen: std::array::from_fn(|k| self.state.seen[k] + waiting(k)),
+            in_log: std::array::from_fn(|k| self.state.in_log[k] + waiting(k)),
+            t0: self.split.t0,
+        }
+    }
+
+    fn push(&mut self, chunk: &SampleChunk) -> Result<(), Error> {
+        let state = &mut self.state;
+        let source = self.source;
+        self.split
+            .route(chunk, &mut |part, v| state.sink(source, part, v))
+            .map(|_| ())
+    }
+
+    fn finish(mut self) -> Result<LogPass, Error> {
+        let state = &mut self.state;
+        let source = self.source;
+        self.split
+            .finish(&mut |part, v| state.sink(source, part, v))?;
+        Ok(self.state.share)
+    }
+}
+
+impl SegmentState<'_> {
+    /// Folds a run of samples of one kind into the segment's share.
+    fn sink(
+        &mut self,
+        source: &LogSource,
+        part: &SampleChunk,
+        to_validation: bool,
+    ) -> Result<(), Error> {
         let k = usize::from(to_validation);
+        let (ctx, req) = (self.ctx, self.ctx.req);
+        let share = &mut self.share;
+        let ws = &mut self.ws;
+        let at = |e: AccumulateError| accumulate_error(source)(e.after(self.first[k]));
         if let (Some(ext), Some(acc)) = (&ctx.extended, share.candidates.as_mut()) {
-            acc[k]
-                .push(&ext.structure, part, &mut ws)
-                .map_err(accumulate_error(source))?;
-            if local_kind(role) == Some(to_validation) {
+            acc[k].push(&ext.structure, part, ws).map_err(at)?;
+            if local_kind(self.role) == Some(to_validation) {
                 ext.regions
                     .push(
                         &ext.structure,
                         part,
-                        &ws,
+                        ws,
                         &mut share.local,
-                        &mut active_ws,
-                        &mut part_ws,
+                        &mut self.active_ws,
+                        &mut self.part_ws,
                     )
                     .map_err(accumulate_error(source))?;
             }
         }
         // Leaves the base regressors of `part` in `ws` for the plotted predictions.
         if to_validation {
-            req.structure.assemble(part, &mut ws)?;
+            req.structure.assemble(part, ws)?;
         } else {
-            share
-                .residuals
-                .push(part, &mut ws)
-                .map_err(accumulate_error(source))?;
+            share.residuals.push(part, ws).map_err(at)?;
         }
         let span = &mut share.span[k];
         if span.0.is_nan() {
@@ -970,30 +1173,78 @@ fn pass_log(
         }
         span.1 = part.t[part.len() - 1];
         let series = &mut share.series[k];
-        let predicted = req.structure.predict_assembled(ctx.theta, part, &ws);
+        let predicted = req.structure.predict_assembled(ctx.theta, part, ws);
         for (i, &t) in part.t.iter().enumerate() {
-            if (seen[k] + i as u64).is_multiple_of(ctx.strides[k]) {
-                series.t.push(t - span.0);
+            if (self.seen[k] + i as u64).is_multiple_of(ctx.strides[k]) {
+                // Absolute time; [`LogPass::times_from_start`] makes it relative.
+                series.t.push(t);
                 for (a, y) in predicted.iter().enumerate() {
                     series.measured[a].push(part.wrench[a][i]);
                     series.predicted[a].push(y[i]);
                 }
             }
         }
-        seen[k] += part.len() as u64;
+        self.seen[k] += part.len() as u64;
+        self.in_log[k] += part.len() as u64;
         Ok(())
-    };
-    match spill {
-        Some(spill) => spill.stream(|chunk| {
-            count_progress(req, chunk);
-            split.route(chunk, &mut sink)
-        })?,
-        None => {
-            stream_log(source, req, threads, |chunk| split.route(chunk, &mut sink))?;
+    }
+}
+
+impl LogPass {
+    /// The share of no samples.
+    fn empty(ctx: &PassContext, role: Role) -> Self {
+        Self {
+            residuals: ctx.residuals.clone(),
+            series: Default::default(),
+            span: [(f64::NAN, f64::NAN); 2],
+            candidates: ctx.extended.as_ref().map(|e| {
+                [
+                    Accumulator::new(&e.structure),
+                    Accumulator::new(&e.structure),
+                ]
+            }),
+            local: match (&ctx.extended, local_kind(role)) {
+                (Some(e), Some(_)) => e.regions.accumulators(&e.structure),
+                _ => Vec::new(),
+            },
         }
     }
-    split.finish(&mut sink)?;
-    Ok(share)
+
+    /// Appends `later`, the share of the samples that directly follow this one's.
+    fn append(&mut self, later: LogPass) -> Result<(), AccumulateError> {
+        self.residuals.merge(&later.residuals);
+        for (k, part) in later.series.into_iter().enumerate() {
+            let series = &mut self.series[k];
+            series.t.extend(part.t);
+            for a in 0..6 {
+                series.measured[a].extend(&part.measured[a]);
+                series.predicted[a].extend(&part.predicted[a]);
+            }
+            let (span, (first, last)) = (&mut self.span[k], later.span[k]);
+            if span.0.is_nan() {
+                span.0 = first;
+            }
+            if !last.is_nan() {
+                span.1 = last;
+            }
+        }
+        if let (Some(mine), Some(theirs)) = (self.candidates.as_mut(), later.candidates) {
+            for (a, b) in mine.iter_mut().zip(&theirs) {
+                a.merge(b)?;
+            }
+        }
+        for (a, b) in self.local.iter_mut().zip(&later.local) {
+            a.merge(b)?;
+        }
+        Ok(())
+    }
+
+    /// Counts the plotted times from the log's first sample of their kind.
+    fn times_from_start(&mut self) {
+        for (series, span) in self.series.iter_mut().zip(self.span) {
+            series.t.iter_mut().for_each(|t| *t -= span.0);
+        }
+    }
 }
 
 /// (1 + ρ)/(1 − ρ) for the largest lag-1 residual autocorrelation ρ over the axes (an

@@ -8,8 +8,8 @@
 //! predictions, and the candidate effects (built from θ̂ and screened on the first pass's
 //! thinned sample). Making them one-pass would change what they are (histogram bins fixed
 //! before the residual scale is known, candidate columns chosen before θ̂) and so the
-//! reports; the spill keeps the second pass exactly as it was: the same 1024-sample chunks
-//! in the same order, hence bit-identical results. Its cost is a write and a read of
+//! reports; the spill keeps the second pass as it was: the same 1024-sample chunks in the
+//! same order (passed in segments, see below). Its cost is a write and a read of
 //! 8 bytes per value (168 B per sample of a quad× log with rotor accelerations, about the
 //! size of its CSV text: 1.7 GB of temp space for 10 M rows), memory copies through the
 //! page cache instead of tokenising and ~21 float parses per sample.
@@ -17,8 +17,14 @@
 //! Format: per chunk, two little-endian u32 (rotor-speed and rotor-acceleration series
 //! counts), then every vector of the [`SampleChunk`] in field order, each as a
 //! little-endian u64 length followed by that many little-endian f64. The file lives in
-//! [`std::env::temp_dir`] (`TMPDIR`) and is removed when its [`Spill`] is dropped, also
-//! on an error or a panic unwinding through the pipeline.
+//! [`std::env::temp_dir`] (`TMPDIR`). On Unix its name is removed as soon as it is open
+//! (the space is freed when the process ends, however it ends: Ctrl-C or a kill leave
+//! nothing behind); elsewhere it is removed when its [`Spill`] is dropped, also on an
+//! error or a panic unwinding through the pipeline.
+//!
+//! The chunks are grouped in segments of a fixed number of chunks; the spill keeps where
+//! each segment starts and the caller's tally of the samples before it, so that segments
+//! can be read back independently (on several threads) and their results placed in order.
 
 use std::fs::{File, OpenOptions};
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -35,16 +41,35 @@ const BUFFER_BYTES: usize = 1 << 18;
 /// Most rotor series a chunk read back may claim (guards against a corrupted file).
 const MAX_ROTORS: u32 = 64;
 
-/// A spill file on disk; removes it when dropped.
+/// A spill file; removes it when dropped.
 #[derive(Debug)]
 pub(crate) struct Spill {
+    /// Read handle (positional reads: segments are read on several threads at once).
+    file: File,
+    /// Its name in the temp dir (for messages; already removed on Unix).
     path: PathBuf,
+    /// Whether the name still has to be removed.
+    named: bool,
+    segments: Vec<Segment>,
+}
+
+/// Where a segment of the spill starts, and what came before it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Segment {
+    /// Byte offset of its first chunk.
+    offset: u64,
+    /// Chunks in it.
+    chunks: usize,
+    /// The writer's caller's tally (e.g. samples of two kinds) over the chunks before it.
+    pub(crate) before: [u64; 2],
 }
 
 impl Drop for Spill {
     fn drop(&mut self) {
-        // Nothing useful to do if it is already gone.
-        let _ = std::fs::remove_file(&self.path);
+        if self.named {
+            // Nothing useful to do if it is already gone.
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
 }
 
@@ -69,26 +94,62 @@ pub(crate) struct SpillWriter {
     out: BufWriter<File>,
     spill: Spill,
     bytes: Vec<u8>,
+    /// Chunks per segment.
+    segment_chunks: usize,
+    /// Bytes written so far.
+    written: u64,
+    /// The caller's running tally.
+    tally: [u64; 2],
 }
 
 impl SpillWriter {
-    /// Creates a new spill file in the temp dir.
-    pub(crate) fn create() -> Result<Self, Error> {
+    /// Creates a new spill file in the temp dir, in segments of `segment_chunks` chunks
+    /// (at least one).
+    pub(crate) fn create(segment_chunks: usize) -> Result<Self, Error> {
         let path = new_path();
+        let fail = spill_error(&path);
         let file = OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&path)
-            .map_err(spill_error(&path))?;
+            .map_err(&fail)?;
+        let mut spill = Spill {
+            file: File::open(&path).map_err(&fail)?,
+            path: path.clone(),
+            named: true,
+            segments: Vec::new(),
+        };
+        // Both handles are open: on Unix the name can go now, so that no exit, however
+        // abrupt, leaves the file behind.
+        spill.named = !(cfg!(unix) && std::fs::remove_file(&path).is_ok());
         Ok(Self {
             out: BufWriter::with_capacity(BUFFER_BYTES, file),
-            spill: Spill { path },
+            spill,
             bytes: Vec::new(),
+            segment_chunks: segment_chunks.max(1),
+            written: 0,
+            tally: [0; 2],
         })
     }
 
-    /// Appends `chunk`.
-    pub(crate) fn write(&mut self, chunk: &SampleChunk) -> Result<(), Error> {
+    /// Appends `chunk`; `tally` is the caller's count of it (e.g. its samples of two
+    /// kinds), summed into each later segment's [`Segment::before`].
+    pub(crate) fn write(&mut self, chunk: &SampleChunk, tally: [u64; 2]) -> Result<(), Error> {
+        let segments = &mut self.spill.segments;
+        if segments
+            .last()
+            .is_none_or(|s| s.chunks == self.segment_chunks)
+        {
+            segments.push(Segment {
+                offset: self.written,
+                chunks: 0,
+                before: self.tally,
+            });
+        }
+        if let Some(last) = segments.last_mut() {
+            last.chunks += 1;
+        }
+        self.tally = [self.tally[0] + tally[0], self.tally[1] + tally[1]];
         let b = &mut self.bytes;
         b.clear();
         b.extend_from_slice(&(chunk.omega.len() as u32).to_le_bytes());
@@ -99,6 +160,7 @@ impl SpillWriter {
                 b.extend_from_slice(&x.to_le_bytes());
             }
         }
+        self.written += self.bytes.len() as u64;
         self.out
             .write_all(&self.bytes)
             .map_err(spill_error(&self.spill.path))
@@ -138,22 +200,56 @@ fn vectors_mut(c: &mut SampleChunk) -> impl Iterator<Item = &mut Vec<f64>> {
 }
 
 impl Spill {
-    /// Reads the chunks back in the order written, handing each to `consume` (one chunk
-    /// in memory at a time).
-    pub(crate) fn stream(
+    /// The segments, in the order written.
+    pub(crate) fn segments(&self) -> &[Segment] {
+        &self.segments
+    }
+
+    /// Reads the chunks of segment `s` back in the order written, handing each to
+    /// `consume` (one chunk in memory at a time; each call opens the file anew, so
+    /// segments can be read on several threads at once).
+    pub(crate) fn stream_segment(
         &self,
+        s: usize,
         mut consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let fail = spill_error(&self.path);
-        let file = File::open(&self.path).map_err(&fail)?;
-        let mut input = BufReader::with_capacity(BUFFER_BYTES, file);
+        let Some(segment) = self.segments.get(s) else {
+            return Ok(());
+        };
+        let at = Positioned {
+            file: &self.file,
+            offset: segment.offset,
+        };
+        let mut input = BufReader::with_capacity(BUFFER_BYTES, at);
         let mut chunk = SampleChunk::default();
         let mut bytes = Vec::new();
-        while let Some(counts) = read_counts(&mut input).map_err(&fail)? {
+        for _ in 0..segment.chunks {
+            let counts = read_counts(&mut input)
+                .map_err(&fail)?
+                .ok_or_else(|| fail(corrupt("segment ends early")))?;
             read_chunk(&mut input, counts, &mut chunk, &mut bytes).map_err(&fail)?;
             consume(&chunk)?;
         }
         Ok(())
+    }
+}
+
+/// Reads `file` from `offset` on by positional reads, which leave the handle's own
+/// position alone (several threads read one handle).
+struct Positioned<'f> {
+    file: &'f File,
+    offset: u64,
+}
+
+impl Read for Positioned<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        #[cfg(unix)]
+        let n = std::os::unix::fs::FileExt::read_at(self.file, buf, self.offset)?;
+        #[cfg(windows)]
+        let n = std::os::windows::fs::FileExt::seek_read(self.file, buf, self.offset)?;
+        self.offset += n as u64;
+        Ok(n)
     }
 }
 
@@ -236,19 +332,26 @@ mod tests {
             }
             chunks.push(c);
         }
-        let mut writer = SpillWriter::create().expect("create");
-        for c in &chunks {
-            writer.write(c).expect("write");
+        let mut writer = SpillWriter::create(2).expect("create");
+        for (k, c) in chunks.iter().enumerate() {
+            writer.write(c, [c.len() as u64, k as u64]).expect("write");
         }
         let spill = writer.finish().expect("finish");
         let path = spill.path.clone();
-        let mut back = Vec::new();
-        spill
-            .stream(|c| {
-                back.push(c.clone());
-                Ok(())
-            })
-            .expect("read back");
+        // Two segments (chunks 0–1 and 2), each with the tally of the chunks before it;
+        // read in reverse order to show they stand alone.
+        let before: Vec<[u64; 2]> = spill.segments().iter().map(|s| s.before).collect();
+        assert_eq!(before, vec![[0, 0], [CHUNK_SAMPLES as u64 + 3, 1]]);
+        let mut back = vec![Vec::new(); 2];
+        for s in [1, 0] {
+            spill
+                .stream_segment(s, |c| {
+                    back[s].push(c.clone());
+                    Ok(())
+                })
+                .expect("read back");
+        }
+        let back: Vec<SampleChunk> = back.concat();
         assert_eq!(back.len(), chunks.len());
         for (a, b) in chunks.iter().zip(&back) {
             let bits = |c: &SampleChunk| -> Vec<u64> {
@@ -268,26 +371,27 @@ mod tests {
         for k in 0..8 {
             c.push(&sample(k, 4));
         }
-        let mut writer = SpillWriter::create().expect("create");
-        writer.write(&c).expect("write");
+        let mut writer = SpillWriter::create(64).expect("create");
+        writer.write(&c, [0; 2]).expect("write");
+        writer.out.flush().expect("flush");
+        writer
+            .out
+            .get_ref()
+            .set_len(writer.written - 5)
+            .expect("truncate");
         let spill = writer.finish().expect("finish");
-        let len = std::fs::metadata(&spill.path).expect("spill").len();
-        let file = OpenOptions::new()
-            .write(true)
-            .open(&spill.path)
-            .expect("open");
-        file.set_len(len - 5).expect("truncate");
-        let err = spill.stream(|_| Ok(())).expect_err("truncated");
+        let err = spill.stream_segment(0, |_| Ok(())).expect_err("truncated");
         let text = err.to_string();
         assert!(text.contains("mrsysid-spill-"), "{text}");
     }
 
-    /// A failed write is dropped without leaving the file behind.
+    /// On Unix the file has no name once open, so nothing is left behind even by a
+    /// killed process; elsewhere dropping an unfinished spill removes it.
     #[test]
-    fn an_unfinished_spill_is_removed() {
-        let writer = SpillWriter::create().expect("create");
+    fn no_spill_file_is_left_behind() {
+        let writer = SpillWriter::create(64).expect("create");
         let path = writer.spill.path.clone();
-        assert!(path.exists());
+        assert_eq!(path.exists(), !cfg!(unix));
         drop(writer);
         assert!(!path.exists());
     }

@@ -64,6 +64,19 @@ pub enum AccumulateError {
     },
 }
 
+impl AccumulateError {
+    /// The same error for a stream that had `samples` samples before this one's first.
+    pub fn after(self, samples: u64) -> Self {
+        match self {
+            Self::NonFinite { field, sample } => Self::NonFinite {
+                field,
+                sample: sample + samples,
+            },
+            other => other,
+        }
+    }
+}
+
 /// One-pass, mergeable statistics of [X | Z] for a model structure.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Accumulator {
@@ -226,6 +239,11 @@ impl Accumulator {
             });
         }
         if other.count == 0 {
+            return Ok(());
+        }
+        if self.count == 0 {
+            // Nothing to combine: the union is `other`, exactly (no refactorisation).
+            *self = other.clone();
             return Ok(());
         }
         let q = self.rows();
