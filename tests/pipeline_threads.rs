@@ -153,6 +153,50 @@ fn the_spilled_second_pass_matches_the_samples_streamed_from_memory() {
     }
 }
 
+/// `copies` copies of the shipped 2000-point quad× sweep (t = 0, 1, … s), each after
+/// the one before in time, written to a file.
+fn long_sweep(name: &str, copies: usize) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("data/quad_x_sweep.csv")).expect("sweep");
+    let mut lines = text.lines();
+    let mut out = format!("{}\n", lines.next().expect("header"));
+    let rows: Vec<&str> = lines.collect();
+    for copy in 0..copies {
+        for row in &rows {
+            let (t, rest) = row.split_once(',').expect("time column");
+            let t: f64 = t.parse().expect("time");
+            out.push_str(&format!("{},{rest}\n", t + (copy * rows.len()) as f64));
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("mrsysid-threads-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join(name);
+    std::fs::write(&path, out).expect("write sweep");
+    path
+}
+
+#[test]
+fn a_log_of_several_second_pass_segments_gives_one_report() {
+    // 72 000 samples: more than one 65 536-sample segment of the second pass, so the
+    // log's second pass runs as two segments (on two threads when it has them) merged
+    // in order. Tolerance zero: the segments are fixed by the sample count, not by the
+    // threads, and a memory log is cut into the same segments.
+    let file = long_sweep("long-sweep.csv", 36);
+    let one = pipeline::run(&request(&[&file], &[], 1)).expect("one thread");
+    // 2 s hold-out segments of two samples, every 5th held out: 4/5 of 72 000 fit.
+    assert_eq!(one.fit_stats.count(), 57_600);
+    assert!(one.diagnosis.is_some() && one.diagnostics.is_some());
+    assert_decimated(&one.fit_series, 57_600);
+    assert_decimated(&one.validation_series, 14_400);
+    // Plotted time counts from each kind's first sample (t = 0 s and 8 s).
+    assert_eq!((one.fit_series.t[0], one.validation_series.t[0]), (0.0, 0.0));
+    let two = pipeline::run(&request(&[&file], &[], 2)).expect("two threads");
+    assert_same_outcome(&one, &two, "two threads");
+    let mut memory = request(&[], &[], 2);
+    memory.logs = vec![in_memory(&file, &memory.vehicle).into()];
+    let from_memory = pipeline::run(&memory).expect("memory");
+    assert_same_outcome(&one, &from_memory, "memory log");
+}
+
 /// The JSON report (as `mrsysid fit --json` writes it) of fitting the shipped log `name`
 /// with diagnosis on `threads` threads, its CSV cut into `range_bytes`-byte ranges.
 fn json_report(name: &str, threads: usize, range_bytes: usize) -> String {
