@@ -1,10 +1,13 @@
 //! Ingest throughput: a 1 M-row contract CSV through `io::open_log` against a bare
 //! `csv::ByteRecord` pass over the same file, and a 100 k-sample MCAP (JSON and CDR,
 //! three topics) through `open_log` against bare message iteration with the `mcap`
-//! crate's linear reader. Both baselines read the same bytes without parsing numbers.
+//! crate's linear reader, without and with decoding every message (serde_json for JSON,
+//! the crate's ros2msg/CDR decoder for CDR: the decoders `open_log` uses). The CSV and
+//! bare MCAP baselines read the same bytes without parsing numbers.
 //!
 //! `cargo bench --bench ingest -- --warm-up-time 1 --measurement-time 3`
 
+use std::collections::HashMap;
 use std::hint::black_box;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -98,6 +101,46 @@ fn bare_mcap(path: &Path) -> usize {
     bytes
 }
 
+/// Bare message iteration plus decoding each message with its channel's decoder; the
+/// number of decoded top-level fields.
+fn decoded_mcap(path: &Path) -> usize {
+    use mrsysid::io::{cdr, ros2msg};
+    let mut f = std::fs::File::open(path).expect("opens");
+    let mut reader = LinearReader::new();
+    let mut schemas = HashMap::new();
+    let mut channels = HashMap::new();
+    let mut fields = 0;
+    while let Some(ev) = reader.next_event() {
+        match ev.expect("valid") {
+            LinearReadEvent::ReadRequest(need) => {
+                let n = f.read(reader.insert(need)).expect("reads");
+                reader.notify_read(n);
+            }
+            LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data)
+                .expect("valid")
+            {
+                mcap::records::Record::Schema { header, data } if header.encoding == "ros2msg" => {
+                    let text = std::str::from_utf8(&data).expect("schema text");
+                    let schema = ros2msg::parse_schema(&header.name, text).expect("schema");
+                    schemas.insert(header.id, schema);
+                }
+                mcap::records::Record::Channel(ch) => {
+                    channels.insert(ch.id, ch.schema_id);
+                }
+                mcap::records::Record::Message { header, data } => {
+                    let value = match schemas.get(&channels[&header.channel_id]) {
+                        Some(schema) => cdr::decode(schema, &data).expect("CDR"),
+                        None => serde_json::from_slice(&data).expect("JSON"),
+                    };
+                    fields += value.as_object().map_or(0, |o| o.len());
+                }
+                _ => {}
+            },
+        }
+    }
+    fields
+}
+
 fn bench(c: &mut Criterion) {
     let v = vehicle();
     let csv_path = file("1m.csv");
@@ -127,6 +170,9 @@ fn bench(c: &mut Criterion) {
         g.sample_size(10);
         g.throughput(Throughput::Elements(MCAP_SAMPLES as u64));
         g.bench_function("bare_messages", |b| b.iter(|| black_box(bare_mcap(&path))));
+        g.bench_function("bare_messages_decoded", |b| {
+            b.iter(|| black_box(decoded_mcap(&path)))
+        });
         g.bench_function("open_log", |b| {
             b.iter(|| black_box(ingest(&path, &v, Some(&mapping))))
         });

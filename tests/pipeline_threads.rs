@@ -188,7 +188,10 @@ fn a_log_of_several_second_pass_segments_gives_one_report() {
     assert_decimated(&one.fit_series, 57_600);
     assert_decimated(&one.validation_series, 14_400);
     // Plotted time counts from each kind's first sample (t = 0 s and 8 s).
-    assert_eq!((one.fit_series.t[0], one.validation_series.t[0]), (0.0, 0.0));
+    assert_eq!(
+        (one.fit_series.t[0], one.validation_series.t[0]),
+        (0.0, 0.0)
+    );
     let two = pipeline::run(&request(&[&file], &[], 2)).expect("two threads");
     assert_same_outcome(&one, &two, "two threads");
     let mut memory = request(&[], &[], 2);

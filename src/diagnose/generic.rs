@@ -135,32 +135,63 @@ fn label(m: &[Signal]) -> String {
         .join("*")
 }
 
-/// Monomial values on `data`: column j of the returned workspace is monomial j.
-fn evaluate(
-    like: &ModelStructure,
-    pool: &[Vec<Signal>],
-    data: &SampleChunk,
-) -> Result<Workspace, ModelError> {
-    let (mut s, _) = like.subset(&[]);
-    for m in pool {
-        let column = Column {
-            axis: Axis::Fx,
-            param: 0,
-            label: label(m),
-            terms: vec![term(1.0, m)],
-        };
-        let name = format!("m{}", s.params.len());
-        s.add_parameter(
-            Parameter {
-                name,
-                unit: "-".into(),
-            },
-            vec![column],
-        );
+/// Monomials evaluated at once while screening: memory holds this many columns of the
+/// screening sample (2.6 MB at 10 000 samples), not the whole pool (~27 MB).
+const MONOMIAL_BLOCK: usize = 16;
+
+/// The pool evaluated on the screening sample one block of monomials at a time (each
+/// column is assembled on its own, so a block gives the values the whole pool would).
+struct MonomialBlocks<'d> {
+    /// One structure per block, with one column per monomial.
+    blocks: Vec<ModelStructure>,
+    data: &'d SampleChunk,
+    ws: Workspace,
+}
+
+impl<'d> MonomialBlocks<'d> {
+    fn new(like: &ModelStructure, pool: &[Vec<Signal>], data: &'d SampleChunk) -> Self {
+        let blocks = pool
+            .chunks(MONOMIAL_BLOCK)
+            .map(|block| {
+                let (mut s, _) = like.subset(&[]);
+                for m in block {
+                    let column = Column {
+                        axis: Axis::Fx,
+                        param: 0,
+                        label: label(m),
+                        terms: vec![term(1.0, m)],
+                    };
+                    let name = format!("m{}", s.params.len());
+                    let unit = "-".into();
+                    s.add_parameter(Parameter { name, unit }, vec![column]);
+                }
+                s
+            })
+            .collect();
+        Self {
+            blocks,
+            data,
+            ws: Workspace::default(),
+        }
     }
-    let mut ws = Workspace::default();
-    s.assemble(data, &mut ws)?;
-    Ok(ws)
+
+    /// Calls `f(j, values of monomial j)` for every monomial, in pool order.
+    fn for_each(&mut self, mut f: impl FnMut(usize, &[f64])) -> Result<(), ModelError> {
+        for (b, block) in self.blocks.iter().enumerate() {
+            block.assemble(self.data, &mut self.ws)?;
+            for k in 0..block.columns.len() {
+                f(b * MONOMIAL_BLOCK + k, self.ws.column(k));
+            }
+        }
+        Ok(())
+    }
+
+    /// The values of monomial `j`.
+    fn values(&mut self, j: usize) -> Result<Vec<f64>, ModelError> {
+        let block = &self.blocks[j / MONOMIAL_BLOCK];
+        block.assemble(self.data, &mut self.ws)?;
+        Ok(self.ws.column(j % MONOMIAL_BLOCK).to_vec())
+    }
 }
 
 /// Orthonormal basis of columns added one at a time (Gram–Schmidt, applied twice).
@@ -238,14 +269,16 @@ pub fn screen(
         .filter(|m| data.has_omega_dot() || !needs_omega_dot(m))
         .collect();
     let mut ws = Workspace::default();
-    extended.assemble(data, &mut ws)?;
-    let values = evaluate(extended, &pool, data)?;
-    let monomial = |j: usize| values.column(j);
+    let mut monomials = MonomialBlocks::new(extended, &pool, data);
     let tests = (pool.len() * Axis::ALL.len()) as f64;
     let mut out = Vec::new();
     for axis in Axis::ALL {
+        // This axis's columns only: memory holds one axis's share of the regressors.
+        let columns: Vec<usize> = extended.axis_columns(axis).collect();
+        let on_axis = extended.select_columns(&columns);
+        on_axis.assemble(data, &mut ws)?;
         let mut basis = Basis { q: Vec::new() };
-        for j in extended.axis_columns(axis) {
+        for j in 0..columns.len() {
             basis.add(ws.column(j));
         }
         let mut r = basis.residual(ws.output(axis));
@@ -255,13 +288,18 @@ pub fn screen(
             if dof < 1.0 || sse <= 0.0 {
                 break;
             }
-            let best = (0..pool.len())
-                .map(|j| (j, monomial(j)))
-                .filter_map(|(j, g)| {
-                    let g2 = basis.orthogonal_norm2(g);
-                    (g2 > 1e-9 * dot(g, g)).then(|| (j, dot(g, &r).powi(2) / g2))
-                })
-                .max_by(|a, b| a.1.total_cmp(&b.1));
+            // The largest gain (the last of equal ones), over monomials that are not
+            // already in the span of the basis.
+            let mut best: Option<(usize, f64)> = None;
+            monomials.for_each(|j, g| {
+                let g2 = basis.orthogonal_norm2(g);
+                if g2 > 1e-9 * dot(g, g) {
+                    let gain = dot(g, &r).powi(2) / g2;
+                    if best.is_none_or(|(_, b)| gain.total_cmp(&b).is_ge()) {
+                        best = Some((j, gain));
+                    }
+                }
+            })?;
             let Some((j, gain)) = best else { break };
             let f = gain / ((sse - gain).max(f64::MIN_POSITIVE) / dof);
             let p = (f_survival(f, dof) * tests).min(1.0);
@@ -269,7 +307,7 @@ pub fn screen(
             if !(p < options.alpha && drop >= options.min_drop) {
                 break;
             }
-            let g = monomial(j);
+            let g = &monomials.values(j)?;
             out.push(Screened {
                 axis,
                 label: label(&pool[j]),
