@@ -136,7 +136,8 @@ fn label(m: &[Signal]) -> String {
 }
 
 /// Monomials evaluated at once while screening: memory holds this many columns of the
-/// screening sample (2.6 MB at 10 000 samples), not the whole pool (~27 MB).
+/// screening sample (at most 16 × 20 000 × 8 B = 2.6 MB), not the whole pool (342
+/// columns: up to 55 MB).
 const MONOMIAL_BLOCK: usize = 16;
 
 /// The pool evaluated on the screening sample one block of monomials at a time (each
