@@ -79,65 +79,61 @@ fn bare_csv(path: &Path) -> usize {
     n
 }
 
-fn bare_mcap(path: &Path) -> usize {
-    let mut f = std::fs::File::open(path).expect("opens");
+/// Calls `f` on every record of the MCAP file at `path`, read with the `mcap` crate's
+/// linear reader.
+fn for_each_record(path: &Path, mut f: impl FnMut(mcap::records::Record)) {
+    let mut file = std::fs::File::open(path).expect("opens");
     let mut reader = LinearReader::new();
-    let mut bytes = 0;
     while let Some(ev) = reader.next_event() {
         match ev.expect("valid") {
             LinearReadEvent::ReadRequest(need) => {
-                let n = f.read(reader.insert(need)).expect("reads");
+                let n = file.read(reader.insert(need)).expect("reads");
                 reader.notify_read(n);
             }
             LinearReadEvent::Record { opcode, data } => {
-                if let mcap::records::Record::Message { data, .. } =
-                    mcap::parse_record(opcode, data).expect("valid")
-                {
-                    bytes += data.len();
-                }
+                f(mcap::parse_record(opcode, data).expect("valid"));
             }
         }
     }
+}
+
+/// Bare message iteration: the payload bytes of every message.
+fn bare_mcap(path: &Path) -> usize {
+    let mut bytes = 0;
+    for_each_record(path, |record| {
+        if let mcap::records::Record::Message { data, .. } = record {
+            bytes += data.len();
+        }
+    });
     bytes
 }
 
 /// Bare message iteration plus decoding each message with its channel's decoder; the
 /// number of decoded top-level fields.
 fn decoded_mcap(path: &Path) -> usize {
+    use mcap::records::Record;
     use mrsysid::io::{cdr, ros2msg};
-    let mut f = std::fs::File::open(path).expect("opens");
-    let mut reader = LinearReader::new();
     let mut schemas = HashMap::new();
     let mut channels = HashMap::new();
     let mut fields = 0;
-    while let Some(ev) = reader.next_event() {
-        match ev.expect("valid") {
-            LinearReadEvent::ReadRequest(need) => {
-                let n = f.read(reader.insert(need)).expect("reads");
-                reader.notify_read(n);
-            }
-            LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data)
-                .expect("valid")
-            {
-                mcap::records::Record::Schema { header, data } if header.encoding == "ros2msg" => {
-                    let text = std::str::from_utf8(&data).expect("schema text");
-                    let schema = ros2msg::parse_schema(&header.name, text).expect("schema");
-                    schemas.insert(header.id, schema);
-                }
-                mcap::records::Record::Channel(ch) => {
-                    channels.insert(ch.id, ch.schema_id);
-                }
-                mcap::records::Record::Message { header, data } => {
-                    let value = match schemas.get(&channels[&header.channel_id]) {
-                        Some(schema) => cdr::decode(schema, &data).expect("CDR"),
-                        None => serde_json::from_slice(&data).expect("JSON"),
-                    };
-                    fields += value.as_object().map_or(0, |o| o.len());
-                }
-                _ => {}
-            },
+    for_each_record(path, |record| match record {
+        Record::Schema { header, data } if header.encoding == "ros2msg" => {
+            let text = std::str::from_utf8(&data).expect("schema text");
+            let schema = ros2msg::parse_schema(&header.name, text).expect("schema");
+            schemas.insert(header.id, schema);
         }
-    }
+        Record::Channel(ch) => {
+            channels.insert(ch.id, ch.schema_id);
+        }
+        Record::Message { header, data } => {
+            let value = match schemas.get(&channels[&header.channel_id]) {
+                Some(schema) => cdr::decode(schema, &data).expect("CDR"),
+                None => serde_json::from_slice(&data).expect("JSON"),
+            };
+            fields += value.as_object().map_or(0, |o| o.len());
+        }
+        _ => {}
+    });
     fields
 }
 
