@@ -1,6 +1,7 @@
 //! End-to-end tests of the `mrsysid` binary: fit on the shipped data with fit-quality
 //! bounds, JSON report and model file, predict/validate consistency, and bad input.
 
+mod scratch;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -17,9 +18,7 @@ fn mrsysid(args: &[&str]) -> Output {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mrsysid-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    scratch::dir("cli").join(name)
 }
 
 fn json(path: &Path) -> serde_json::Value {

@@ -2,6 +2,7 @@
 //! naming what cannot be identified; partially unexcited data drop parameters with the
 //! cause in words (issue 13, item 1).
 
+mod scratch;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -11,9 +12,7 @@ fn root() -> PathBuf {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("mrsysid-unsupported-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    scratch::dir("unsupported").join(name)
 }
 
 fn fit(log: &Path) -> Output {

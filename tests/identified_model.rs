@@ -1,6 +1,7 @@
 //! Model files: save → load round trip, predictions equal the structure's, bad files are
 //! refused with the file named.
 
+mod scratch;
 use mrsysid::identified::IdentifiedModel;
 use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
 use mrsysid::rotor::BladeConstants;
@@ -38,7 +39,7 @@ fn model() -> IdentifiedModel {
 }
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    std::env::temp_dir().join(format!("mrsysid-{}-{name}", std::process::id()))
+    scratch::dir("model").join(name)
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! Contract CSV: write → stream back, identical values, chunking and segments.
 
 mod io_support;
+mod scratch;
 
 use std::path::PathBuf;
 
@@ -10,9 +11,7 @@ use mrsysid::io::contract_csv::write_contract_csv;
 use mrsysid::io::{ReadOptions, open_log};
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mrsysid-io-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    scratch::dir("io").join(name)
 }
 
 #[test]

@@ -5,6 +5,7 @@
 //! CRLF, CR, none at the end) and quoting must not change what is read.
 
 mod io_support;
+mod scratch;
 
 use std::path::{Path, PathBuf};
 
@@ -55,9 +56,7 @@ fn file(name: &str, n: usize, edit: impl Fn(usize, &mut Vec<String>)) -> PathBuf
         text += &fields.join(",");
         text.push('\n');
     }
-    let dir = std::env::temp_dir().join(format!("mrsysid-csv-threads-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+    let path = scratch::dir("csv-threads").join(name);
     std::fs::write(&path, text).unwrap();
     path
 }
@@ -142,10 +141,7 @@ fn first_bad_row_is_named_across_range_boundaries() {
 fn invalid_utf8_in_a_late_column_names_it() {
     let mut text = format!("{HEADER}\n{}\n{}\n", row(0), row(1)).into_bytes();
     text.extend_from_slice(b"0.02,1,0,0,0.1,0,0,900,900,900,900,\xff,0,-11.8,0,0,0\n");
-    let path = std::env::temp_dir().join(format!(
-        "mrsysid-csv-threads-utf8-{}.csv",
-        std::process::id()
-    ));
+    let path = scratch::dir("csv-threads").join("utf8.csv");
     std::fs::write(&path, text).unwrap();
     let name = path.file_name().unwrap().to_string_lossy().into_owned();
     assert_eq!(
@@ -257,9 +253,7 @@ fn text_with(end: &str, trailing: bool) -> Vec<u8> {
 }
 
 fn write(name: &str, bytes: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mrsysid-csv-threads-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
+    let path = scratch::dir("csv-threads").join(name);
     std::fs::write(&path, bytes).unwrap();
     path
 }

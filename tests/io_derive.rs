@@ -1,6 +1,7 @@
 //! Derived signals against analytic ones, with the error bounds claimed.
 
 mod io_support;
+mod scratch;
 
 use std::f64::consts::PI;
 use std::io::Write;
@@ -12,9 +13,7 @@ use mrsysid::io::{Mapping, ReadOptions, open_log};
 use mrsysid::sample::SampleChunk;
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mrsysid-derive-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    scratch::dir("derive").join(name)
 }
 
 const RATE_HZ: f64 = 400.0;

@@ -8,6 +8,7 @@
 //! `MRSYSID_FUZZ_CASES=200000 MRSYSID_FUZZ_SEED=7 cargo test --test io_fuzz --release`.
 
 mod io_support;
+mod scratch;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
@@ -89,9 +90,7 @@ fn mutate(rng: &mut StdRng, base: &[u8]) -> Vec<u8> {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mrsysid-fuzz-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    scratch::dir("fuzz").join(name)
 }
 
 /// Reads a whole log; returns the number of chunks or the error (never panics).

@@ -2,6 +2,7 @@
 //! column. The messages are part of the API; no input panics.
 
 mod io_support;
+mod scratch;
 
 use std::path::PathBuf;
 
@@ -23,8 +24,7 @@ fn write(name: &str, bytes: &[u8]) -> PathBuf {
     // One directory per call: tests run in parallel and some share a file name.
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("mrsysid-malformed-{}-{call}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch::dir(&format!("malformed-{call}"));
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
     path

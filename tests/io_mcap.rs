@@ -2,6 +2,7 @@
 //! interpolation within max_gap and split into segments beyond it; malformed files.
 
 mod io_support;
+mod scratch;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -15,9 +16,7 @@ use mrsysid::io::{Mapping, ReadOptions, open_log};
 use mrsysid::sample::SampleChunk;
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mrsysid-mcap-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    scratch::dir("mcap").join(name)
 }
 
 fn read_all(

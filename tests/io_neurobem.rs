@@ -3,6 +3,7 @@
 //! path and with the uncompressed text.
 
 mod io_support;
+mod scratch;
 
 use std::path::Path;
 
@@ -89,7 +90,7 @@ fn mapped_and_contract_paths_give_identical_samples() {
     let vehicle = Vehicle::from_toml_file(Path::new("data/vehicles/neurobem.toml")).unwrap();
     let mapping = Mapping::from_toml_file(Path::new("examples/neurobem.toml")).unwrap();
     let (mapped, _) = read(Path::new(FILES[2]), &vehicle, Some(&mapping));
-    let out = std::env::temp_dir().join(format!("neurobem-contract-{}.csv", std::process::id()));
+    let out = scratch::dir("neurobem").join("contract.csv");
     write_contract_csv(&out, [&mapped]).unwrap();
     let (contract, _) = read(&out, &vehicle, None);
     io_support::assert_same(&contract, &mapped);
@@ -105,7 +106,7 @@ fn gzip_and_plain_text_give_identical_samples() {
     let mut text = Vec::new();
     let file = std::fs::File::open(FILES[1]).unwrap();
     std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(file), &mut text).unwrap();
-    let out = std::env::temp_dir().join(format!("neurobem-plain-{}.csv", std::process::id()));
+    let out = scratch::dir("neurobem").join("plain.csv");
     std::fs::write(&out, text).unwrap();
     let (plain, _) = read(&out, &vehicle, Some(&mapping));
     assert_eq!(plain.len(), ROWS[1]);
@@ -116,7 +117,7 @@ fn gzip_and_plain_text_give_identical_samples() {
 fn corrupt_gzip_is_an_error_naming_the_file() {
     // A gzip stream cut in the middle: a read error, never a panic or a silent end.
     let bytes = std::fs::read(FILES[0]).unwrap();
-    let out = std::env::temp_dir().join(format!("neurobem-cut-{}.csv.gz", std::process::id()));
+    let out = scratch::dir("neurobem").join("neurobem-cut.csv.gz");
     std::fs::write(&out, &bytes[..bytes.len() / 2]).unwrap();
     let vehicle = Vehicle::from_toml_file(Path::new("data/vehicles/neurobem.toml")).unwrap();
     let mapping = Mapping::from_toml_file(Path::new("examples/neurobem.toml")).unwrap();
@@ -124,5 +125,5 @@ fn corrupt_gzip_is_an_error_naming_the_file() {
         .and_then(|mut r| r.by_ref().find_map(Result::err).map_or(Ok(()), Err))
         .expect_err("a truncated gzip stream is an error")
         .to_string();
-    assert!(err.contains("neurobem-cut-"), "{err}");
+    assert!(err.contains("neurobem-cut.csv.gz"), "{err}");
 }

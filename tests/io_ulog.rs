@@ -4,6 +4,7 @@
 //! files, each answered with its own error naming the byte offset and message.
 
 mod io_support;
+mod scratch;
 
 use std::path::{Path, PathBuf};
 
@@ -17,9 +18,7 @@ use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::Vehicle;
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mrsysid-ulog-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    scratch::dir("ulog").join(name)
 }
 
 fn read_all(

@@ -2,6 +2,7 @@
 //! airframe's rotor table) is accepted with notes, flown by the truth simulator, and
 //! identified with the general-layout Eq. 22 (exactness itself: `eq22_exactness.rs`).
 
+mod scratch;
 use std::path::Path;
 
 use mrsysid::estimate::{FitOptions, evaluate, fit};
@@ -109,8 +110,7 @@ fn asymmetric_x_flies_and_fits() {
 /// `note:` lines on stderr and fits (exit 0); a simulated sweep of it is the log.
 #[test]
 fn cli_fit_prints_layout_notes() {
-    let dir = std::env::temp_dir().join(format!("mrsysid-layout-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch::dir("layout");
     let csv = dir.join("asym_sweep.csv");
     let run = |args: &[&str]| {
         std::process::Command::new(env!("CARGO_BIN_EXE_mrsysid"))

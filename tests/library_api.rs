@@ -4,6 +4,7 @@
 //! reported by `run`, and the results object's statistics checked against their
 //! definitions.
 
+mod scratch;
 use std::path::{Path, PathBuf};
 
 use mrsysid::error::RequestError;
@@ -266,7 +267,7 @@ fn text_inputs_are_refused_with_their_name() {
     assert!(!e.to_string().is_empty());
     let e = Mapping::from_toml_str("[signals\nrates =", "m.toml").unwrap_err();
     assert!(e.to_string().starts_with("m.toml"), "{e}");
-    let path = std::env::temp_dir().join(format!("mrsysid-api-{}.toml", std::process::id()));
+    let path = scratch::dir("api").join("model.toml");
     std::fs::write(&path, "schema_version = 1\nparameters = 3\n").unwrap();
     let e = IdentifiedModel::load(&path).unwrap_err();
     assert!(e.to_string().contains("not a model file"), "{e}");

@@ -2,6 +2,7 @@
 //! statistics (first pass) and residual/plot/candidate shares (second pass) are computed
 //! by the same code on whichever thread picks the log up, and merged in job order.
 
+mod scratch;
 use std::path::{Path, PathBuf};
 
 use mrsysid::diagnose::DiagnoseOptions;
@@ -25,9 +26,7 @@ fn flight_part(name: &str, rows: std::ops::Range<usize>) -> PathBuf {
         out.push_str(line);
         out.push('\n');
     }
-    let dir = std::env::temp_dir().join(format!("mrsysid-threads-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(name);
+    let path = scratch::dir("threads").join(name);
     std::fs::write(&path, out).expect("write part");
     path
 }
@@ -167,9 +166,7 @@ fn long_sweep(name: &str, copies: usize) -> PathBuf {
             out.push_str(&format!("{},{rest}\n", t + (copy * rows.len()) as f64));
         }
     }
-    let dir = std::env::temp_dir().join(format!("mrsysid-threads-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(name);
+    let path = scratch::dir("threads").join(name);
     std::fs::write(&path, out).expect("write sweep");
     path
 }

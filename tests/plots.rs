@@ -1,5 +1,6 @@
 //! Plots render without system fonts and are written whole (SVG + PNG, no partial files).
 
+mod scratch;
 use mrsysid::report::plots::{
     AxisSeries, NormalProbability, ResidualDensity, normal_probability, residual_densities,
     time_histories,
@@ -7,9 +8,7 @@ use mrsysid::report::plots::{
 use mrsysid::sample::Axis;
 
 fn out_dir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("mrsysid-plots-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    scratch::dir(&format!("plots-{name}"))
 }
 
 fn assert_written(files: &[std::path::PathBuf]) {

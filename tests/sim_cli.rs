@@ -1,5 +1,6 @@
 //! The `simulate` shell: exit status, messages, and no partial output on failure.
 
+mod scratch;
 use std::process::Command;
 
 fn run(args: &[&str]) -> (bool, String) {
@@ -15,8 +16,7 @@ fn run(args: &[&str]) -> (bool, String) {
 
 #[test]
 fn bad_input_fails_cleanly_and_writes_nothing() {
-    let dir = std::env::temp_dir().join(format!("mrsysid-sim-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch::dir("sim-cli");
     let out = dir.join("out.csv");
     let out_s = out.to_str().unwrap();
     let cases: [(&[&str], &str); 4] = [
@@ -74,8 +74,7 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
 /// A bad `--rotor` file is refused with the file, the line and the reason.
 #[test]
 fn bad_rotor_file_names_file_line_and_field() {
-    let dir = std::env::temp_dir().join(format!("mrsysid-sim-rotor-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch::dir("sim-rotor");
     let rotor = dir.join("rotor.toml");
     let out = dir.join("out.csv");
     for (text, needles) in [
