@@ -44,8 +44,9 @@ const MAX_ROTORS: u32 = 64;
 /// A spill file; removes it when dropped.
 #[derive(Debug)]
 pub(crate) struct Spill {
-    /// Read handle (positional reads: segments are read on several threads at once).
-    file: File,
+    /// Read handle (positional reads: segments are read on several threads at once);
+    /// `None` only while the spill is dropped.
+    file: Option<File>,
     /// Its name in the temp dir (for messages; already removed on Unix).
     path: PathBuf,
     /// Whether the name still has to be removed.
@@ -66,6 +67,8 @@ pub(crate) struct Segment {
 
 impl Drop for Spill {
     fn drop(&mut self) {
+        // Closed first: a file still open cannot be removed everywhere (Windows).
+        drop(self.file.take());
         if self.named {
             // Nothing useful to do if it is already gone.
             let _ = std::fs::remove_file(&self.path);
@@ -114,7 +117,7 @@ impl SpillWriter {
             .open(&path)
             .map_err(&fail)?;
         let mut spill = Spill {
-            file: File::open(&path).map_err(&fail)?,
+            file: Some(File::open(&path).map_err(&fail)?),
             path: path.clone(),
             named: true,
             segments: Vec::new(),
@@ -206,19 +209,19 @@ impl Spill {
     }
 
     /// Reads the chunks of segment `s` back in the order written, handing each to
-    /// `consume` (one chunk in memory at a time; each call opens the file anew, so
-    /// segments can be read on several threads at once).
+    /// `consume` (one chunk in memory at a time; positional reads, so segments can be
+    /// read on several threads at once).
     pub(crate) fn stream_segment(
         &self,
         s: usize,
         mut consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let fail = spill_error(&self.path);
-        let Some(segment) = self.segments.get(s) else {
+        let (Some(segment), Some(file)) = (self.segments.get(s), self.file.as_ref()) else {
             return Ok(());
         };
         let at = Positioned {
-            file: &self.file,
+            file,
             offset: segment.offset,
         };
         let mut input = BufReader::with_capacity(BUFFER_BYTES, at);
