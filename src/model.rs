@@ -64,6 +64,7 @@
 
 use crate::mixing::{Mixing, mix_row};
 use crate::sample::{Axis, Sample, SampleChunk};
+use crate::util::range_of;
 use crate::vehicle::{ConfigurationClass, Vehicle};
 
 /// A per-sample quantity that regressor terms multiply.
@@ -637,13 +638,7 @@ impl ModelStructure {
             capacity,
             ..
         } = ws;
-        let range = |v: &[f64]| {
-            v.iter()
-                .take(n)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-                    (lo.min(x), hi.max(x))
-                })
-        };
+        let range = |v: &[f64]| range_of(v.iter().take(n).copied());
         for k in 0..3 {
             motion[k] = range(&chunk.velocity[k]);
             motion[3 + k] = range(&chunk.rates[k]);
@@ -670,11 +665,7 @@ impl ModelStructure {
                 Some(z) => dst.copy_from_slice(z),
                 None => dst.fill(0.0),
             }
-            measured[a] = dst
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                    (lo.min(v), hi.max(v))
-                });
+            measured[a] = range_of(dst.iter().copied());
             for t in &self.known[a] {
                 apply_term(dst, t, false, -1.0, &lookup);
             }
@@ -1349,13 +1340,6 @@ fn vortex_ring_onset(descent: f64, vh: f64, nu0: f64) -> f64 {
 
 /// The values of signal `s` for the `n` samples of `chunk`; computed signals live at
 /// `offset` in `signals`.
-/// Smallest and largest of `values` ((∞, −∞) when empty).
-fn range_of(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-        (lo.min(x), hi.max(x))
-    })
-}
-
 fn signal_slice<'a>(
     s: Signal,
     chunk: &'a SampleChunk,

@@ -1213,12 +1213,12 @@ impl LogPass {
     /// Appends `later`, the share of the samples that directly follow this one's.
     fn append(&mut self, later: LogPass) -> Result<(), AccumulateError> {
         self.residuals.merge(&later.residuals);
-        for (k, part) in later.series.into_iter().enumerate() {
+        for (k, mut part) in later.series.into_iter().enumerate() {
             let series = &mut self.series[k];
-            series.t.extend(part.t);
+            series.t.append(&mut part.t);
             for a in 0..6 {
-                series.measured[a].extend(&part.measured[a]);
-                series.predicted[a].extend(&part.predicted[a]);
+                series.measured[a].append(&mut part.measured[a]);
+                series.predicted[a].append(&mut part.predicted[a]);
             }
             let (span, (first, last)) = (&mut self.span[k], later.span[k]);
             if span.0.is_nan() {

@@ -33,7 +33,7 @@ use faer::linalg::qr::no_pivoting::factor::{
 };
 use std::hash::{DefaultHasher, Hasher};
 
-use faer::{Mat, Par};
+use faer::{Mat, MatMut, Par};
 
 use crate::model::{ModelError, ModelStructure, Workspace};
 use crate::sample::{Axis, SampleChunk};
@@ -118,9 +118,47 @@ fn insert_distinct(set: &mut Vec<u64>, h: u64) {
 /// Scratch buffers for folding chunks into an [`Accumulator`].
 struct Stacked {
     a: Mat<f64>,
+    qr: QrScratch,
+}
+
+/// Reusable scratch of [`householder_qr`]: block reflectors and faer's work memory (for
+/// the shape and block size in `key`).
+pub(crate) struct QrScratch {
     h: Mat<f64>,
     mem: Option<MemBuffer>,
-    mem_key: (usize, usize, usize),
+    key: (usize, usize, usize),
+}
+
+impl QrScratch {
+    pub(crate) const fn new() -> Self {
+        Self {
+            h: Mat::new(),
+            mem: None,
+            key: (0, 0, 0),
+        }
+    }
+}
+
+/// Householder QR of `a` (rows × m) in place, on the calling thread (`Par::Seq`: faer's
+/// convenience `Mat::qr` would take its global rayon pool): R in the upper triangle.
+pub(crate) fn householder_qr(a: MatMut<'_, f64>, s: &mut QrScratch) {
+    let (rows, m) = a.shape();
+    let bs = recommended_block_size::<f64>(rows, m);
+    s.h.resize_with(bs, m.min(rows), |_, _| 0.0);
+    let key = (rows, m, bs);
+    if s.mem.is_none() || s.key != key {
+        let need = qr_in_place_scratch::<f64>(rows, m, bs, Par::Seq, Default::default());
+        s.mem = Some(MemBuffer::new(need));
+        s.key = key;
+    }
+    let mem = s.mem.as_mut().expect("allocated above");
+    qr_in_place(
+        a,
+        s.h.as_mut(),
+        Par::Seq,
+        MemStack::new(mem),
+        Default::default(),
+    );
 }
 
 impl Accumulator {
@@ -192,11 +230,7 @@ impl Accumulator {
         }
         for j in 0..q {
             let col = self.data_column(ws, j);
-            let (lo, hi) = col
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                    (lo.min(v), hi.max(v))
-                });
+            let (lo, hi) = crate::util::range_of(col.iter().copied());
             self.min[j] = self.min[j].min(lo);
             self.max[j] = self.max[j].max(hi);
         }
@@ -474,36 +508,15 @@ fn column_field(c: &crate::model::Column) -> String {
 thread_local! {
     static STACKED: std::cell::RefCell<Stacked> = const { std::cell::RefCell::new(Stacked {
         a: Mat::new(),
-        h: Mat::new(),
-        mem: None,
-        mem_key: (0, 0, 0),
+        qr: QrScratch::new(),
     }) };
 }
 
 /// Householder QR of the first `rows` rows of `s.a` (rows × m) in place; returns the
 /// upper-triangular m × m factor (column-major) with non-negative diagonal.
 fn triangular_factor(s: &mut Stacked, rows: usize, m: usize) -> Vec<f64> {
-    let bs = recommended_block_size::<f64>(rows, m);
-    s.h.resize_with(bs, m.min(rows), |_, _| 0.0);
-    let key = (rows, m, bs);
-    if s.mem.is_none() || s.mem_key != key {
-        s.mem = Some(MemBuffer::new(qr_in_place_scratch::<f64>(
-            rows,
-            m,
-            bs,
-            Par::Seq,
-            Default::default(),
-        )));
-        s.mem_key = key;
-    }
-    let mem = s.mem.as_mut().expect("allocated above");
-    qr_in_place(
-        s.a.as_mut(),
-        s.h.as_mut(),
-        Par::Seq,
-        MemStack::new(mem),
-        Default::default(),
-    );
+    debug_assert_eq!(s.a.shape(), (rows, m));
+    householder_qr(s.a.as_mut(), &mut s.qr);
     let mut r = vec![0.0; m * m];
     for i in 0..m.min(rows) {
         let sign = if s.a[(i, i)] < 0.0 { -1.0 } else { 1.0 };

@@ -1,8 +1,18 @@
-//! Small helpers shared across modules: vector algebra, quaternion rotation and atomic
-//! file writes, each written once.
+//! Small helpers shared across modules: vector algebra, value ranges, quaternion rotation
+//! and atomic file writes, each written once.
 
 use std::io::Write;
 use std::path::Path;
+
+/// Smallest and largest of `values`, NaN ignored (`f64::min`/`max`); (∞, −∞) when none
+/// is left.
+pub fn range_of(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    values
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+}
 
 /// Dot product Σ aᵢbᵢ over the common length of `a` and `b`.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {

@@ -11,11 +11,10 @@
 
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::qr::no_pivoting::factor::{
-    qr_in_place, qr_in_place_scratch, recommended_block_size,
-};
 use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
 use faer::{Mat, Par};
+
+use crate::stats::{QrScratch, householder_qr};
 
 /// Solution of min ‖X θ − z‖ for a small dense X of full column rank.
 #[derive(Debug, Clone)]
@@ -171,17 +170,8 @@ pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
 /// The upper-triangular factor R of a Householder QR of `a` (rows ≥ columns), on this
 /// thread.
 fn triangular_factor(mut a: Mat<f64>) -> Mat<f64> {
-    let (m, n) = a.shape();
-    let block = recommended_block_size::<f64>(m, n);
-    let mut coeff = Mat::<f64>::zeros(block, m.min(n));
-    let scratch = qr_in_place_scratch::<f64>(m, n, block, Par::Seq, Default::default());
-    qr_in_place(
-        a.as_mut(),
-        coeff.as_mut(),
-        Par::Seq,
-        MemStack::new(&mut MemBuffer::new(scratch)),
-        Default::default(),
-    );
+    let n = a.ncols();
+    householder_qr(a.as_mut(), &mut QrScratch::new());
     Mat::from_fn(n, n, |i, j| if j >= i { a[(i, j)] } else { 0.0 })
 }
 
@@ -191,13 +181,13 @@ fn singular_value_decomposition(
     r: &Mat<f64>,
 ) -> Result<(Vec<f64>, Mat<f64>), faer::linalg::svd::SvdError> {
     let k = r.ncols();
-    let (mut u, mut v, mut s) = (Mat::zeros(k, k), Mat::zeros(k, k), Diag::zeros(k));
-    let full = ComputeSvdVectors::Full;
-    let scratch = svd_scratch::<f64>(k, k, full, full, Par::Seq, Default::default());
+    let (mut v, mut s) = (Mat::zeros(k, k), Diag::zeros(k));
+    let (none, full) = (ComputeSvdVectors::No, ComputeSvdVectors::Full);
+    let scratch = svd_scratch::<f64>(k, k, none, full, Par::Seq, Default::default());
     svd(
         r.as_ref(),
         s.as_mut(),
-        Some(u.as_mut()),
+        None,
         Some(v.as_mut()),
         Par::Seq,
         MemStack::new(&mut MemBuffer::new(scratch)),

@@ -161,11 +161,7 @@ fn panels<DB: DrawingBackend>(
 }
 
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
+    let (lo, hi) = crate::util::range_of(values.filter(|v| v.is_finite()));
     if !lo.is_finite() {
         return (-1.0, 1.0);
     }
