@@ -725,6 +725,10 @@ impl Search<'_> {
                 .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
                 .reverse()
         });
+        if let Some(i) = likeliest_in_band(&scored, look_alike) {
+            let likeliest = scored.remove(i);
+            scored.insert(0, likeliest);
+        }
         let confounded = self
             .confounded_with_completion(&scored)
             .map(|(i, first)| {
@@ -881,9 +885,62 @@ impl Search<'_> {
                 self.kept = without;
                 self.current = reduced;
                 self.in_model.retain(|(c, _, _)| *c != e);
+            } else if let Some(said) = self.rechoose_form(e, &s, &without, &reduced, stay) {
+                withdrawn.push(said);
             }
         }
         withdrawn
+    }
+
+    /// For an effect offered in several forms (`e`, scoring `kept` against the model
+    /// `without` it): the form the held-out data now favour, chosen again after later
+    /// additions (an earlier choice can rest on structure a later term took). Swaps it
+    /// in when another form of the family is accepted with a larger held-out likelihood
+    /// ratio and says so; forms within noise of each other are reported as not
+    /// separable.
+    fn rechoose_form(
+        &mut self,
+        e: usize,
+        kept: &CandidateScore,
+        without: &[usize],
+        reduced: &Trial,
+        stay: f64,
+    ) -> Option<String> {
+        let stats = self.stats;
+        let kind = stats.candidates[e].kind;
+        if !kind.is_family_of_forms() {
+            return None;
+        }
+        let in_model: Vec<usize> = self.in_model.iter().map(|(c, _, _)| *c).collect();
+        let (best, c, trial) = (0..stats.candidates.len())
+            .filter(|&f| stats.candidates[f].kind == kind && !in_model.contains(&f))
+            .map(|f| {
+                let local = self.local_before(f, reduced);
+                let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
+                score(self, without, f, reduced, local, self.level(f), stay)
+            })
+            .filter(|(s, _, _)| s.rejected.is_none())
+            .max_by(|a, b| a.0.held_out_lr.total_cmp(&b.0.held_out_lr))?;
+        let trial = trial.filter(|_| best.held_out_lr > kept.held_out_lr)?;
+        let options = self.options;
+        let noise = chi2_quantile(1.0, 1.0 - options.alpha) * options.variance_inflation.max(1.0);
+        let alike: &[String] = if best.held_out_lr - kept.held_out_lr <= noise {
+            std::slice::from_ref(&kept.name)
+        } else {
+            &[]
+        };
+        let said = format!(
+            "{}: the form {} fits the held-out data better now (likelihood ratio {:.1} against {:.1})",
+            kept.name, best.name, best.held_out_lr, kept.held_out_lr
+        );
+        let entry = (c, best.clone(), finding(&best, alike, &[]));
+        if let Some(slot) = self.in_model.iter_mut().find(|(f, _, _)| *f == e) {
+            *slot = entry;
+        }
+        self.tried.push(c);
+        self.kept = trial.columns.clone();
+        self.current = trial;
+        Some(said)
     }
 }
 
@@ -1011,6 +1068,32 @@ fn preference(s: &CandidateScore, look_alike: f64) -> f64 {
     } else {
         s.total_gain * (1.0 + look_alike)
     }
+}
+
+/// Among the accepted candidates of the winner's group (completion or not, named or
+/// not) whose ranking gain is within `look_alike` of the winner's, the one with the
+/// largest held-out likelihood ratio: the summed relative gains rank coarsely, and
+/// within that band the held-out likelihood decides. Its index in `scored`, when that
+/// is not the winner.
+fn likeliest_in_band(
+    scored: &[(CandidateScore, usize, Option<Trial>)],
+    look_alike: f64,
+) -> Option<usize> {
+    let first = &scored.first()?.0;
+    if first.rejected.is_some() || first.kind.is_unspecific() {
+        return None;
+    }
+    let group = |s: &CandidateScore| (s.kind.is_model_completion(), s.kind.is_unspecific());
+    let bar = (1.0 - look_alike) * preference(first, look_alike);
+    scored
+        .iter()
+        .enumerate()
+        .filter(|(_, (s, _, _))| {
+            s.rejected.is_none() && group(s) == group(first) && preference(s, look_alike) >= bar
+        })
+        .max_by(|a, b| a.1.0.held_out_lr.total_cmp(&b.1.0.held_out_lr))
+        .map(|(i, _)| i)
+        .filter(|&i| i != 0)
 }
 
 /// Scores candidate `c` added to the model with columns `kept` (`current`); `local`: the
