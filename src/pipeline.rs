@@ -2,7 +2,7 @@
 //! statistics (fit data and hold-out validation data), estimate (seed §5), then a
 //! streaming second pass for residual diagnostics and plot series. The text of a log
 //! file is read once: the first pass spills its parsed chunks to a temporary binary file
-//! that the second pass streams back ([`crate::spill`] explains the choice), in segments
+//! that the second pass streams back (the `spill` module's docs explain the choice), in segments
 //! of `SEGMENT_CHUNKS` chunks passed on all the log's threads and merged in order
 //! (`pass_log`): results depend on the segment size, never on `--threads`.
 //!

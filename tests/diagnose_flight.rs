@@ -109,12 +109,13 @@ fn a_completion_that_takes_an_effects_evidence_names_it_as_a_look_alike() {
 
 /// A 30 s flight whose logged rotor speeds lag by 20 ms, at a seed where thrust from
 /// rotor acceleration (ΔT_i ∝ Ω̇_i) and the delay (ΔT_i ∝ Ω_i Ω̇_i, with the yaw torque
-/// that follows) are both accepted in the same step and explain about as much. The
-/// summed relative gains put the acceleration form ahead; the held-out likelihood, which
-/// weighs each axis by its noise, puts the delay ahead, and within the look-alike band
-/// it decides. Before, the acceleration form was named and the delay its look-alike.
+/// that follows), two forms of one effect, are both accepted in the same step and
+/// explain about as much. The summed relative gains put the acceleration form ahead; the
+/// held-out likelihood, which weighs each axis by its noise, puts the delay ahead, and
+/// between forms of one effect it decides. Before, the acceleration form was named and
+/// the delay its look-alike.
 #[test]
-fn among_look_alikes_the_held_out_likelihood_names_the_delay() {
+fn between_forms_of_one_effect_the_held_out_likelihood_names_the_delay() {
     let d = diagnose_flight(&["delay=0.02"], 30.0, 0.0, 12_004);
     println!("{:#?}", d.findings);
     let step = d

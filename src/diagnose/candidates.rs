@@ -80,9 +80,24 @@ impl EffectKind {
         matches!(self, Self::Generic | Self::DecoupledMoments)
     }
 
+    /// The effect this kind is a form of (itself for most kinds). Thrust from rotor
+    /// acceleration (ΔT_i ∝ Ω̇_i) and the rotor-speed delay (ΔF = τ dF/dΩ Ω̇, yaw torque
+    /// included) are two forms of loads leading the logged rotor speeds: each physics
+    /// text names the other's mechanism, and they agree to first order where Ω varies
+    /// little.
+    pub fn family(self) -> Self {
+        match self {
+            Self::RotorAccelerationThrust => Self::RotorSpeedDelay,
+            kind => kind,
+        }
+    }
+
     /// True for an effect offered in several forms of which one enters a model.
     pub fn is_family_of_forms(self) -> bool {
-        matches!(self, Self::GroundEffect | Self::WakeInteraction)
+        matches!(
+            self.family(),
+            Self::GroundEffect | Self::WakeInteraction | Self::RotorSpeedDelay
+        )
     }
 }
 

@@ -34,7 +34,9 @@
 //! After each addition every earlier addition is tested again against the model without
 //! it, and withdrawn when it would no longer be accepted (a term that only stood in for
 //! the effect found later); to stay it needs half the gain it needed to enter, so a
-//! term near the bar does not enter and leave in turn. Terms of the generic pool are a family of unnamed hypotheses:
+//! term near the bar does not enter and leave in turn. An effect offered in several
+//! forms ([`EffectKind::is_family_of_forms`]) is then given the form the held-out data
+//! now favour (largest held-out likelihood ratio). Terms of the generic pool are a family of unnamed hypotheses:
 //! at most [`DiagnoseOptions::max_generic`] of them enter a model. An added effect whose
 //! held-out fit another candidate of the same kind matches within noise (a weak rotor and
 //! a stronger rotor diagonally opposite, of the same spin) is reported with it as one
@@ -42,7 +44,9 @@
 //!
 //! Among accepted candidates, completions of the Eq. 22 structure (terms its own
 //! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
-//! effects; within each group the largest validation gain summed over the axes wins.
+//! effects; within each group the largest validation gain summed over the axes wins,
+//! except that between forms of one effect within [`DiagnoseOptions::look_alike`] of
+//! each other the largest held-out likelihood ratio wins.
 //! A named effect that the winning completion takes the evidence of (no longer accepted
 //! once the completion is in the model) while it explains about as much is reported as
 //! the completion's look-alike; when it explains clearly more (by more than
@@ -678,7 +682,7 @@ impl Search<'_> {
                 && self
                     .in_model
                     .iter()
-                    .any(|(c, _, _)| stats.candidates[*c].kind == kind)
+                    .any(|(c, _, _)| stats.candidates[*c].kind.family() == kind.family())
         };
         let remaining: Vec<usize> = (0..stats.candidates.len())
             .filter(|c| !self.tried.contains(c))
@@ -816,32 +820,38 @@ impl Search<'_> {
         others: &[(CandidateScore, usize, Option<Trial>)],
     ) -> (Vec<String>, Vec<String>) {
         let options = self.options;
-        let accepted = others.iter().map(|s| &s.0).filter(|s| s.rejected.is_none());
-        // A look-alike may miss a held-out bar the winner just cleared: it explains as
-        // much, significantly and plausibly.
-        let comparable = others.iter().map(|s| &s.0).filter(|s| {
-            matches!(
-                s.rejected,
-                None | Some(
-                    Rejection::NotPredictive { .. }
-                        | Rejection::SmallGain { .. }
-                        | Rejection::SmallNetGain { .. }
-                )
-            )
-        });
-        let look_alikes = comparable
+        // A look-alike, or another form of the winner's effect, may miss a held-out bar
+        // the winner just cleared: it explains as much, significantly and plausibly.
+        let comparable: Vec<&CandidateScore> = others
+            .iter()
+            .map(|s| &s.0)
             .filter(|s| {
-                s.kind != best.kind
+                matches!(
+                    s.rejected,
+                    None | Some(
+                        Rejection::NotPredictive { .. }
+                            | Rejection::SmallGain { .. }
+                            | Rejection::SmallNetGain { .. }
+                    )
+                )
+            })
+            .collect();
+        let look_alikes = comparable
+            .iter()
+            .filter(|s| {
+                s.kind.family() != best.kind.family()
                     && s.kind.is_model_completion() == best.kind.is_model_completion()
                     && s.total_gain >= (1.0 - options.look_alike) * best.total_gain
             })
             .map(|s| s.name.clone())
             .collect();
         let noise = chi2_quantile(1.0, 1.0 - options.alpha) * options.variance_inflation.max(1.0);
-        let not_separable = accepted
-            .filter(|s| s.kind == best.kind && s.kind != EffectKind::Generic)
+        let not_separable = comparable
+            .iter()
+            .filter(|s| s.kind.family() == best.kind.family() && s.kind != EffectKind::Generic)
+            .filter(|s| s.rejected.is_none() || best.kind.is_family_of_forms())
             .filter(|s| (s.held_out_lr - best.held_out_lr).abs() <= noise)
-            .map(describe)
+            .map(|s| describe(s))
             .collect();
         (look_alikes, not_separable)
     }
@@ -913,7 +923,9 @@ impl Search<'_> {
         }
         let in_model: Vec<usize> = self.in_model.iter().map(|(c, _, _)| *c).collect();
         let (best, c, trial) = (0..stats.candidates.len())
-            .filter(|&f| stats.candidates[f].kind == kind && !in_model.contains(&f))
+            .filter(|&f| {
+                stats.candidates[f].kind.family() == kind.family() && !in_model.contains(&f)
+            })
             .map(|f| {
                 let local = self.local_before(f, reduced);
                 let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
@@ -1070,26 +1082,28 @@ fn preference(s: &CandidateScore, look_alike: f64) -> f64 {
     }
 }
 
-/// Among the accepted candidates of the winner's group (completion or not, named or
-/// not) whose ranking gain is within `look_alike` of the winner's, the one with the
-/// largest held-out likelihood ratio: the summed relative gains rank coarsely, and
-/// within that band the held-out likelihood decides. Its index in `scored`, when that
-/// is not the winner.
+/// Among the accepted forms of the winner's effect (a family of forms) whose ranking
+/// gain is within `look_alike` of the winner's, the one with the largest held-out
+/// likelihood ratio: the summed relative gains rank coarsely, and between forms of one
+/// effect the held-out likelihood decides. Look-alikes of other kinds keep the gain
+/// order (between two mechanisms a likelihood difference within noise is no evidence).
+/// Its index in `scored`, when that is not the winner.
 fn likeliest_in_band(
     scored: &[(CandidateScore, usize, Option<Trial>)],
     look_alike: f64,
 ) -> Option<usize> {
     let first = &scored.first()?.0;
-    if first.rejected.is_some() || first.kind.is_unspecific() {
+    if first.rejected.is_some() || !first.kind.is_family_of_forms() {
         return None;
     }
-    let group = |s: &CandidateScore| (s.kind.is_model_completion(), s.kind.is_unspecific());
     let bar = (1.0 - look_alike) * preference(first, look_alike);
     scored
         .iter()
         .enumerate()
         .filter(|(_, (s, _, _))| {
-            s.rejected.is_none() && group(s) == group(first) && preference(s, look_alike) >= bar
+            s.rejected.is_none()
+                && s.kind.family() == first.kind.family()
+                && preference(s, look_alike) >= bar
         })
         .max_by(|a, b| a.1.0.held_out_lr.total_cmp(&b.1.0.held_out_lr))
         .map(|(i, _)| i)
