@@ -31,16 +31,18 @@
 //!    held-out samples where it acts and on the axes it acts on, so a short stretch near
 //!    the ground is not diluted by a long flight away from it.
 //!
-//! After each addition every earlier addition is tested again against the model without
-//! it, and withdrawn when it would no longer be accepted (a term that only stood in for
-//! the effect found later); to stay it needs half the gain it needed to enter, so a
-//! term near the bar does not enter and leave in turn. An effect offered in several
-//! forms ([`EffectKind::is_family_of_forms`]) is then given the form the held-out data
-//! now favour (largest held-out likelihood ratio). Terms of the generic pool are a family of unnamed hypotheses:
-//! at most [`DiagnoseOptions::max_generic`] of them enter a model. An added effect whose
-//! held-out fit another candidate of the same kind matches within noise (a weak rotor and
-//! a stronger rotor diagonally opposite, of the same spin) is reported with it as one
-//! finding, not separable with these data.
+//! After each addition every earlier addition is tested again against the model
+//! without it, and withdrawn when it would no longer be accepted (a term that only
+//! stood in for the effect found later); to stay it needs half the gain it needed
+//! to enter, so a term near the bar does not enter and leave in turn. An effect
+//! offered in several forms ([`EffectKind::is_family_of_forms`]) is then given the
+//! form the held-out data now favour (largest held-out likelihood ratio). Terms of
+//! the generic pool are a family of unnamed hypotheses: at most
+//! [`DiagnoseOptions::max_generic`] of them enter a model. An added effect whose
+//! held-out fit another candidate of the same kind, or another form of its family,
+//! matches within noise (a weak rotor and a stronger rotor diagonally opposite, of
+//! the same spin) is reported with it as one finding, not separable with these
+//! data.
 //!
 //! Among accepted candidates, completions of the Eq. 22 structure (terms its own
 //! assumptions drop, [`EffectKind::is_model_completion`]) are added before undeclared
@@ -270,7 +272,8 @@ pub struct DiagnosisStep {
     /// Candidates of the added one's kind whose held-out fit equals it within noise, as
     /// findings (e.g. "rotor 1 stronger by 10.2 %").
     pub not_separable: Vec<String>,
-    /// Earlier additions withdrawn after this one, with the reason.
+    /// Earlier additions withdrawn after this one, or replaced by another form of their
+    /// family, with the reason.
     pub withdrawn: Vec<String>,
 }
 
@@ -902,16 +905,16 @@ impl Search<'_> {
         withdrawn
     }
 
-    /// For an effect offered in several forms (`e`, scoring `kept` against the model
-    /// `without` it): the form the held-out data now favour, chosen again after later
-    /// additions (an earlier choice can rest on structure a later term took). Swaps it
-    /// in when another form of the family is accepted with a larger held-out likelihood
-    /// ratio and says so; forms within noise of each other are reported as not
-    /// separable.
+    /// For an earlier addition `e` offered in several forms (`in_use` its score against
+    /// `reduced`, the model without it, whose columns are `without`): the form the
+    /// held-out data now favour, chosen again after later additions (an earlier choice
+    /// can rest on structure a later term took). Swaps it in when another form of the
+    /// family is accepted with a larger held-out likelihood ratio and says so; forms
+    /// within noise of each other are reported as not separable.
     fn rechoose_form(
         &mut self,
         e: usize,
-        kept: &CandidateScore,
+        in_use: &CandidateScore,
         without: &[usize],
         reduced: &Trial,
         stay: f64,
@@ -933,17 +936,17 @@ impl Search<'_> {
             })
             .filter(|(s, _, _)| s.rejected.is_none())
             .max_by(|a, b| a.0.held_out_lr.total_cmp(&b.0.held_out_lr))?;
-        let trial = trial.filter(|_| best.held_out_lr > kept.held_out_lr)?;
+        let trial = trial.filter(|_| best.held_out_lr > in_use.held_out_lr)?;
         let options = self.options;
         let noise = chi2_quantile(1.0, 1.0 - options.alpha) * options.variance_inflation.max(1.0);
-        let alike: &[String] = if best.held_out_lr - kept.held_out_lr <= noise {
-            std::slice::from_ref(&kept.name)
+        let alike: &[String] = if best.held_out_lr - in_use.held_out_lr <= noise {
+            std::slice::from_ref(&in_use.name)
         } else {
             &[]
         };
         let said = format!(
             "{}: the form {} fits the held-out data better now (likelihood ratio {:.1} against {:.1})",
-            kept.name, best.name, best.held_out_lr, kept.held_out_lr
+            in_use.name, best.name, best.held_out_lr, in_use.held_out_lr
         );
         let entry = (c, best.clone(), finding(&best, alike, &[]));
         if let Some(slot) = self.in_model.iter_mut().find(|(f, _, _)| *f == e) {

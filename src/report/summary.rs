@@ -179,7 +179,8 @@ pub struct StepRow {
     /// Findings of its own kind that fit the held-out data as well within noise.
     #[serde(default)]
     pub not_separable: Vec<String>,
-    /// Earlier additions withdrawn after it, with the reason.
+    /// Earlier additions withdrawn after it, or replaced by another form of their family,
+    /// with the reason.
     #[serde(default)]
     pub withdrawn: Vec<String>,
     /// Candidates, best first.
