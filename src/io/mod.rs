@@ -260,7 +260,9 @@ pub struct LogReader {
     segment_samples: u64,
     last_segment: usize,
     done: bool,
-    failed: bool,
+    /// No more chunks: the end was reached or an error was returned (the reader is
+    /// fused, as the iterator contract asks).
+    over: bool,
     chunk: SampleChunk,
     /// `chunk` was lent out by [`LogReader::next_chunk`]: cleared at the next step.
     lent: bool,
@@ -503,7 +505,7 @@ impl LogReader {
             segment_samples: 0,
             last_segment: 0,
             done: false,
-            failed: false,
+            over: false,
             chunk,
             lent: false,
             summary,
@@ -964,7 +966,7 @@ impl LogReader {
 
     /// Steps to the next chunk, left in `chunk`: `None` at the end or after an error.
     fn advance(&mut self) -> Option<Result<(), IoError>> {
-        if self.failed {
+        if self.over {
             return None;
         }
         if self.lent {
@@ -978,11 +980,11 @@ impl LogReader {
                 Some(Ok(()))
             }
             Ok(false) => {
-                self.failed = true;
+                self.over = true;
                 None
             }
             Err(e) => {
-                self.failed = true;
+                self.over = true;
                 Some(Err(e))
             }
         }
