@@ -257,7 +257,7 @@ impl Accumulator {
                 dst[..q].copy_from_slice(&self.r[j * q..(j + 1) * q]);
                 dst[q..].copy_from_slice(self.data_column(ws, j));
             }
-            self.r = triangular_factor(s, q + n, q);
+            self.r = triangular_factor(s);
         });
         self.count += n as u64;
         Ok(())
@@ -307,7 +307,7 @@ impl Accumulator {
                     s.a[(q + i, j)] = other.r[j * q + i];
                 }
             }
-            self.r = triangular_factor(s, 2 * q, q);
+            self.r = triangular_factor(s);
         });
         self.count += other.count;
         Ok(())
@@ -512,10 +512,10 @@ thread_local! {
     }) };
 }
 
-/// Householder QR of the first `rows` rows of `s.a` (rows × m) in place; returns the
-/// upper-triangular m × m factor (column-major) with non-negative diagonal.
-fn triangular_factor(s: &mut Stacked, rows: usize, m: usize) -> Vec<f64> {
-    debug_assert_eq!(s.a.shape(), (rows, m));
+/// Householder QR of `s.a` (rows × m) in place; returns the upper-triangular m × m
+/// factor (column-major) with non-negative diagonal.
+fn triangular_factor(s: &mut Stacked) -> Vec<f64> {
+    let (rows, m) = s.a.shape();
     householder_qr(s.a.as_mut(), &mut s.qr);
     let mut r = vec![0.0; m * m];
     for i in 0..m.min(rows) {
@@ -564,7 +564,7 @@ impl Accumulator {
                     *d = f0 * v;
                 }
             }
-            triangular_factor(s, q, k)
+            triangular_factor(s)
         });
         let scaled = |u: usize, f0: f64, lower: bool| {
             let (lo, hi) = (f0 * self.min[u], f0 * self.max[u]);

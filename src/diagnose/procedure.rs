@@ -848,7 +848,7 @@ impl Search<'_> {
             })
             .map(|s| s.name.clone())
             .collect();
-        let noise = chi2_quantile(1.0, 1.0 - options.alpha) * options.variance_inflation.max(1.0);
+        let noise = self.lr_noise();
         let not_separable = comparable
             .iter()
             .filter(|s| s.kind.family() == best.kind.family() && s.kind != EffectKind::Generic)
@@ -857,6 +857,13 @@ impl Search<'_> {
             .map(|s| describe(s))
             .collect();
         (look_alikes, not_separable)
+    }
+
+    /// Held-out likelihood-ratio difference within which two candidates fit the held-out
+    /// data alike: κ χ²₁(1 − α), one parameter's worth with coloured residuals.
+    fn lr_noise(&self) -> f64 {
+        let o = self.options;
+        chi2_quantile(1.0, 1.0 - o.alpha) * o.variance_inflation.max(1.0)
     }
 
     /// Tests every earlier addition again against the current model without it, and
@@ -909,8 +916,9 @@ impl Search<'_> {
     /// `reduced`, the model without it, whose columns are `without`): the form the
     /// held-out data now favour, chosen again after later additions (an earlier choice
     /// can rest on structure a later term took). Swaps it in when another form of the
-    /// family is accepted with a larger held-out likelihood ratio and says so; forms
-    /// within noise of each other are reported as not separable.
+    /// family is accepted (at the bar to stay, as the form in use) with a larger held-out
+    /// likelihood ratio and says so; forms within noise of each other are reported as not
+    /// separable.
     fn rechoose_form(
         &mut self,
         e: usize,
@@ -937,18 +945,16 @@ impl Search<'_> {
             .filter(|(s, _, _)| s.rejected.is_none())
             .max_by(|a, b| a.0.held_out_lr.total_cmp(&b.0.held_out_lr))?;
         let trial = trial.filter(|_| best.held_out_lr > in_use.held_out_lr)?;
-        let options = self.options;
-        let noise = chi2_quantile(1.0, 1.0 - options.alpha) * options.variance_inflation.max(1.0);
-        let alike: &[String] = if best.held_out_lr - in_use.held_out_lr <= noise {
-            std::slice::from_ref(&in_use.name)
+        let alike = if best.held_out_lr - in_use.held_out_lr <= self.lr_noise() {
+            vec![describe(in_use)]
         } else {
-            &[]
+            Vec::new()
         };
         let said = format!(
             "{}: the form {} fits the held-out data better now (likelihood ratio {:.1} against {:.1})",
             in_use.name, best.name, best.held_out_lr, in_use.held_out_lr
         );
-        let entry = (c, best.clone(), finding(&best, alike, &[]));
+        let entry = (c, best.clone(), finding(&best, &alike, &[]));
         if let Some(slot) = self.in_model.iter_mut().find(|(f, _, _)| *f == e) {
             *slot = entry;
         }
