@@ -104,6 +104,9 @@ pub enum Signal {
     D2r,
     /// Rate of the virtual rudder δ̇r = M_ix,r Ω̇, rad/s².
     DrDot,
+    /// Second rate of the virtual rudder δ̈r = M_ix,r Ω̈, rad/s³ (Ω̈ derived by the fit
+    /// pipeline, [`crate::io::derive::rotor_jerk`]).
+    DrDDot,
     /// Rate δ̇ = M_ix,row Ω̇ of the virtual actuator of one row of Eq. 20 (0 δt, 1 δa,
     /// 2 δe, 3 δr): a rotor-local sum Σ w_i Ω̇_i, in that actuator's unit per second.
     ActuatorRate(u8),
@@ -303,6 +306,12 @@ pub enum ModelError {
         "the model needs rotor accelerations (the J_z * dr_dot term of Eq. 22f) but the data has none; derive them, or neglect the J_z terms"
     )]
     MissingRotorAcceleration,
+    /// The model needs rates of the rotor accelerations (a rotor-speed delay's J_z δ̈r
+    /// term) and the data has none.
+    #[error(
+        "the model needs rates of the rotor accelerations (the J_z * dr_ddot term of a rotor-speed delay) but the data has none; they are derived from omega_dot by the fit pipeline"
+    )]
+    MissingRotorAccelerationRate,
     /// A chunk whose signal vectors do not all hold one value per time stamp.
     #[error("malformed sample chunk: signal {signal:?}: {problem}")]
     ChunkShape {
@@ -598,6 +607,9 @@ impl ModelStructure {
         if self.needs_omega_dot() && !chunk.has_omega_dot() {
             return Err(ModelError::MissingRotorAcceleration);
         }
+        if self.required.contains(&Signal::DrDDot) && !chunk.has_omega_ddot() {
+            return Err(ModelError::MissingRotorAccelerationRate);
+        }
         let per_rotor_ground = self
             .required
             .iter()
@@ -697,6 +709,7 @@ impl ModelStructure {
                 mix_row(self.mixing.row(row), &chunk.omega, true, dst);
             }
             DrDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst),
+            DrDDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_ddot, false, dst),
             ActuatorRate(row) => {
                 let row = rows[usize::from(row) % 4];
                 mix_row(self.mixing.row(row), &chunk.omega_dot, false, dst);

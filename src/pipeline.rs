@@ -27,7 +27,8 @@ use crate::estimate::{
     self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, FitOptions, Folds,
     ResidualDiagnostics, ResidualPass,
 };
-use crate::io::{self, LogReader, Mapping, ReadOptions, Summary};
+use crate::io::derive::{JerkScratch, rotor_jerk};
+use crate::io::{self, DeriveOptions, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Workspace};
 use crate::sample::{SampleChunk, Signals};
 use crate::source::LogSource;
@@ -272,7 +273,9 @@ fn stream_log(
     share: usize,
     mut consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
 ) -> Result<Summary, Error> {
+    let mut jerk = JerkScratch::default();
     let mut feed = |chunk: &mut SampleChunk| {
+        rotor_jerk(chunk, &jerk_options(req), &mut jerk);
         count_progress(req, chunk);
         consume(chunk)
     };
@@ -346,6 +349,16 @@ fn stream_log(
             .unwrap_or_else(|_| Err(RequestError::WorkerStopped.into()));
         consumed.and(summary)
     })
+}
+
+/// Differentiator of the rates of rotor acceleration ([`rotor_jerk`], on the re-cut
+/// chunks of every log alike): the mapping file's `[derive]` table when given, else the
+/// request's read options.
+fn jerk_options(req: &FitRequest) -> DeriveOptions {
+    req.mapping
+        .as_ref()
+        .and_then(|m| m.derive)
+        .unwrap_or(req.read.derive)
 }
 
 /// Re-cuts the chunks of one log (across segment boundaries) into chunks of exactly
@@ -745,6 +758,7 @@ impl Extended {
             theta: &fit.mmr.theta,
             has_height: signals.height,
             has_omega_dot: signals.omega_dot,
+            has_omega_ddot: signals.omega_ddot,
             has_attitude: signals.attitude,
         };
         let set = candidate_set(&ctx, Some(screening), options)?;
@@ -970,7 +984,10 @@ fn pass_log(
                 let seen = [0, 1].map(|k| at.seen[k] + in_log[k]);
                 let start = Start { seen, in_log, ..at };
                 let mut pass = SegmentPass::new(ctx, source, role, start);
+                let mut jerk = JerkScratch::default();
                 spill.stream_segment(s, |chunk| {
+                    // Not spilled: derived again from the same chunk, bit for bit.
+                    rotor_jerk(chunk, &jerk_options(ctx.req), &mut jerk);
                     count_progress(ctx.req, chunk);
                     pass.push(chunk)
                 })?;

@@ -61,6 +61,10 @@ pub struct SampleChunk {
     pub omega: Vec<Vec<f64>>,
     /// Rotor accelerations Ω̇_i, rad/s², one vector per rotor; empty when not available.
     pub omega_dot: Vec<Vec<f64>>,
+    /// Rates of the rotor accelerations Ω̈_i, rad/s³, one vector per rotor: derived from
+    /// Ω̇ by the fit pipeline ([`crate::io::derive::rotor_jerk`]), never read from a
+    /// log; empty when not derived.
+    pub omega_ddot: Vec<Vec<f64>>,
     /// Measured force F_x, F_y, F_z (N) and moment M_x, M_y, M_z (N m), body axes,
     /// gravity excluded, in [`Axis`] order.
     pub wrench: [Vec<f64>; 6],
@@ -85,6 +89,7 @@ impl SampleChunk {
             } else {
                 Vec::new()
             },
+            omega_ddot: Vec::new(),
             wrench: [v(), v(), v(), v(), v(), v()],
             height: Vec::new(),
             attitude: Default::default(),
@@ -111,6 +116,11 @@ impl SampleChunk {
         !self.omega_dot.is_empty()
     }
 
+    /// True when rates of the rotor accelerations are present.
+    pub fn has_omega_ddot(&self) -> bool {
+        !self.omega_ddot.is_empty()
+    }
+
     /// True when the CG height is present.
     pub fn has_height(&self) -> bool {
         !self.height.is_empty()
@@ -127,6 +137,7 @@ impl SampleChunk {
         Signals {
             rotors: self.rotor_count(),
             omega_dot: self.has_omega_dot(),
+            omega_ddot: self.has_omega_ddot(),
             height: self.has_height(),
             attitude: self.has_attitude(),
         }
@@ -139,6 +150,7 @@ impl SampleChunk {
         self.rates.iter_mut().for_each(Vec::clear);
         self.omega.iter_mut().for_each(Vec::clear);
         self.omega_dot.iter_mut().for_each(Vec::clear);
+        self.omega_ddot.iter_mut().for_each(Vec::clear);
         self.wrench.iter_mut().for_each(Vec::clear);
         self.height.clear();
         self.attitude.iter_mut().for_each(Vec::clear);
@@ -191,6 +203,7 @@ impl SampleChunk {
         };
         rotors(&mut self.omega, &src.omega);
         rotors(&mut self.omega_dot, &src.omega_dot);
+        rotors(&mut self.omega_ddot, &src.omega_ddot);
         for (d, s) in self.wrench.iter_mut().zip(&src.wrench) {
             ext(d, s, &range);
         }
@@ -200,7 +213,7 @@ impl SampleChunk {
         }
     }
 
-    /// Copies sample `k` out of the chunk.
+    /// Copies sample `k` out of the chunk (without Ω̈, which [`Sample`] does not carry).
     pub fn sample(&self, k: usize) -> Sample {
         Sample {
             t: self.t[k],
@@ -253,6 +266,8 @@ pub struct Signals {
     pub rotors: usize,
     /// Rotor accelerations Ω̇_i present.
     pub omega_dot: bool,
+    /// Rates of the rotor accelerations Ω̈_i present (derived by the fit pipeline).
+    pub omega_ddot: bool,
     /// CG height present.
     pub height: bool,
     /// Attitude quaternion present.
@@ -286,6 +301,7 @@ impl Sample {
         Signals {
             rotors: self.omega.len(),
             omega_dot: !self.omega_dot.is_empty(),
+            omega_ddot: false,
             height: self.height.is_some(),
             attitude: self.attitude.is_some(),
         }

@@ -260,6 +260,21 @@ pub(crate) fn check_lengths(c: &SampleChunk) -> Result<(), (String, String)> {
             required.push((format!("omega_dot{}", i + 1), w.len()));
         }
     }
+    if c.has_omega_ddot() {
+        if c.omega_ddot.len() != c.omega.len() {
+            return Err((
+                "omega_ddot".into(),
+                format!(
+                    "{} series of rotor-acceleration rates for {} rotors",
+                    c.omega_ddot.len(),
+                    c.omega.len()
+                ),
+            ));
+        }
+        for (i, w) in c.omega_ddot.iter().enumerate() {
+            required.push((format!("omega_ddot{}", i + 1), w.len()));
+        }
+    }
     optional.push(("height".into(), c.height.len()));
     for (k, name) in ["qw", "qx", "qy", "qz"].iter().enumerate() {
         optional.push((name.to_string(), c.attitude[k].len()));

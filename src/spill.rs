@@ -214,7 +214,7 @@ impl Spill {
     pub(crate) fn stream_segment(
         &self,
         s: usize,
-        mut consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
+        mut consume: impl FnMut(&mut SampleChunk) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let fail = spill_error(&self.path);
         let (Some(segment), Some(file)) = (self.segments.get(s), self.file.as_ref()) else {
@@ -232,7 +232,7 @@ impl Spill {
                 .map_err(&fail)?
                 .ok_or_else(|| fail(corrupt("segment ends early")))?;
             read_chunk(&mut input, counts, &mut chunk, &mut bytes).map_err(&fail)?;
-            consume(&chunk)?;
+            consume(&mut chunk)?;
         }
         Ok(())
     }

@@ -96,6 +96,7 @@ fn check_candidate(
         theta: &theta,
         has_height: true,
         has_omega_dot: true,
+        has_omega_ddot: false,
         has_attitude: true,
     };
     let cand = library(&ctx)
@@ -288,6 +289,7 @@ fn gathered_rows_equal_the_assembled_part() {
         theta: &theta,
         has_height: true,
         has_omega_dot: true,
+        has_omega_ddot: false,
         has_attitude: true,
     };
     let mut rng = StdRng::seed_from_u64(5);

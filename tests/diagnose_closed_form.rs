@@ -83,6 +83,7 @@ fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::diagnose::Diag
         theta: &f.mmr.theta,
         has_height: false,
         has_omega_dot: true,
+        has_omega_ddot: false,
         has_attitude: false,
     };
     let mut screening = Thinned::new(SCREENING_SAMPLES);

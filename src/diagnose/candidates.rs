@@ -154,6 +154,8 @@ pub struct CandidateContext<'a> {
     pub has_height: bool,
     /// The data has rotor accelerations (delay candidate).
     pub has_omega_dot: bool,
+    /// The data has rates of the rotor accelerations (the delay's reaction-torque term).
+    pub has_omega_ddot: bool,
     /// The data has the attitude (steady-wind candidate).
     pub has_attitude: bool,
 }
@@ -759,15 +761,26 @@ fn delay(ctx: &CandidateContext) -> Candidate {
     };
     let mut roll = thrust(&|i| -rotors[i].y);
     let mut pitch = thrust(&|i| rotors[i].x);
+    let mut yaw = torque;
     if jz != 0.0 {
         roll.push(term(jz, &[Signal::Q, Signal::DrDot]));
         pitch.push(term(-jz, &[Signal::P, Signal::DrDot]));
+        // The reaction torque J_z δ̇r leads the log too; with a motor time constant of
+        // tens of ms its rate J_z δ̈r is most of the delay's yaw moment.
+        if ctx.has_omega_ddot {
+            yaw.push(term(jz, &[Signal::DrDDot]));
+        }
     }
+    let yaw_label = if ctx.has_omega_ddot && jz != 0.0 {
+        "-Sum s_i dQ_i/dt + Jz dr_ddot"
+    } else {
+        "-Sum s_i dQ_i/dt"
+    };
     let columns = vec![
         column(Axis::Fz, "-Sum dT_i/dt", thrust(&|_| -1.0)),
         column(Axis::Mx, "-Sum y_i dT_i/dt + Jz q dr_dot", roll),
         column(Axis::My, "Sum x_i dT_i/dt - Jz p dr_dot", pitch),
-        column(Axis::Mz, "-Sum s_i dQ_i/dt", torque),
+        column(Axis::Mz, yaw_label, yaw),
     ];
     Candidate {
         kind: EffectKind::RotorSpeedDelay,

@@ -1272,6 +1272,7 @@ pub fn diagnose_chunks(
         theta: &fit.mmr.theta,
         has_height: first.is_some_and(|c| !c.is_empty() && c.has_height()),
         has_omega_dot: first.is_some_and(|c| c.has_omega_dot()),
+        has_omega_ddot: first.is_some_and(|c| c.has_omega_ddot()),
         has_attitude: first.is_some_and(|c| !c.is_empty() && c.has_attitude()),
     };
     let mut thinned = super::Thinned::new(super::SCREENING_SAMPLES);

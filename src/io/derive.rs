@@ -5,6 +5,7 @@
 
 use serde::Deserialize;
 
+use crate::sample::SampleChunk;
 use crate::util::{cross, quat_to_matrix};
 
 /// Options of the derivations.
@@ -118,6 +119,65 @@ pub fn sg_derivative_weights(times: &[f64], k: usize, order: usize, w: &mut Vec<
     true
 }
 
+/// A sample interval longer than this many times a chunk's median interval is a gap (a
+/// join of the reader's segments): Ω̈ is never differentiated across it.
+const JERK_GAP_FACTOR: f64 = 3.0;
+
+/// Reusable buffers of [`rotor_jerk`].
+#[derive(Debug, Default)]
+pub struct JerkScratch {
+    intervals: Vec<f64>,
+    weights: Vec<f64>,
+}
+
+/// Fills `chunk.omega_ddot` with Ω̈_i, rad/s³: the Savitzky–Golay derivative (window
+/// and order of `options`) of each Ω̇_i series, one-sided at the chunk's ends and at
+/// time gaps, so that Ω̈ is a function of the chunk alone (the fit pipeline's chunks
+/// are the same from a file and from memory). Empty when the chunk has no Ω̇; 0 on a
+/// stretch too short to differentiate.
+pub fn rotor_jerk(chunk: &mut SampleChunk, options: &DeriveOptions, scratch: &mut JerkScratch) {
+    let SampleChunk {
+        t,
+        omega_dot,
+        omega_ddot,
+        ..
+    } = chunk;
+    let n = t.len();
+    omega_ddot.resize_with(omega_dot.len(), Vec::new);
+    for v in omega_ddot.iter_mut() {
+        v.clear();
+        v.resize(n, 0.0);
+    }
+    if omega_dot.is_empty() || n < 2 {
+        return;
+    }
+    let JerkScratch { intervals, weights } = scratch;
+    intervals.clear();
+    intervals.extend(t.windows(2).map(|w| w[1] - w[0]));
+    let mid = intervals.len() / 2;
+    let gap = JERK_GAP_FACTOR * *intervals.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let mut start = 0;
+    for end in 1..=n {
+        if end < n && t[end] - t[end - 1] <= gap {
+            continue;
+        }
+        let width = options.sg_window.min(end - start);
+        for k in start..end {
+            let lo = k
+                .saturating_sub(options.sg_window / 2)
+                .clamp(start, end - width);
+            let times = &t[lo..lo + width];
+            if !sg_derivative_weights(times, k - lo, options.sg_order, weights) {
+                continue;
+            }
+            for (dst, src) in omega_ddot.iter_mut().zip(omega_dot.iter()) {
+                dst[k] = weights.iter().zip(&src[lo..]).map(|(w, x)| w * x).sum();
+            }
+        }
+        start = end;
+    }
+}
+
 /// Gaussian elimination with partial pivoting on the leading `n`×`n` block; false when
 /// singular.
 fn solve_spd(a: &mut [[f64; 6]; 6], b: &mut [f64; 6], n: usize) -> bool {
@@ -225,6 +285,61 @@ pub fn body_velocity(q: [f64; 4], v_world: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A chunk of `n` samples at 100 Hz with Ω̇_1 = f(t), Ω̇_2 = −f(t), a time gap of 1 s
+    /// after sample `gap_after` (if any).
+    fn accelerations(n: usize, gap_after: Option<usize>, f: impl Fn(f64) -> f64) -> SampleChunk {
+        let mut c = SampleChunk::with_capacity(2, n, true);
+        for k in 0..n {
+            let t = 0.01 * k as f64 + gap_after.map_or(0.0, |g| if k > g { 1.0 } else { 0.0 });
+            c.t.push(t);
+            c.omega.iter_mut().for_each(|w| w.push(700.0));
+            c.omega_dot[0].push(f(t));
+            c.omega_dot[1].push(-f(t));
+        }
+        c
+    }
+
+    #[test]
+    fn rotor_jerk_is_exact_on_quadratics_and_never_crosses_a_gap() {
+        // Order-2 fits differentiate a quadratic exactly, one-sided windows too: Ω̈ =
+        // 2 a t + b to rounding (1e-9 relative to values of ~50 rad/s³).
+        let (a, b) = (40.0, -3.0);
+        let quad = |t: f64| a * t * t + b * t + 5.0;
+        let mut c = accelerations(50, None, quad);
+        rotor_jerk(
+            &mut c,
+            &DeriveOptions::default(),
+            &mut JerkScratch::default(),
+        );
+        for (k, &t) in c.t.iter().enumerate() {
+            assert!((c.omega_ddot[0][k] - (2.0 * a * t + b)).abs() < 1e-9, "{k}");
+            assert_eq!(c.omega_ddot[1][k], -c.omega_ddot[0][k]);
+        }
+        // A step in Ω̇ across a 1 s gap: differentiated across it, the samples next to
+        // the gap would see a slope of ~100 rad/s² over the window; each side is
+        // constant, so Ω̈ is 0 on both (to rounding).
+        let mut g = accelerations(40, Some(19), |t| if t < 0.5 { 10.0 } else { 90.0 });
+        rotor_jerk(
+            &mut g,
+            &DeriveOptions::default(),
+            &mut JerkScratch::default(),
+        );
+        assert!(
+            g.omega_ddot[0].iter().all(|x| x.abs() < 1e-9),
+            "{:?}",
+            g.omega_ddot[0]
+        );
+        // No Ω̇, no Ω̈.
+        let mut none = SampleChunk::with_capacity(2, 3, false);
+        none.t.extend([0.0, 0.01, 0.02]);
+        rotor_jerk(
+            &mut none,
+            &DeriveOptions::default(),
+            &mut JerkScratch::default(),
+        );
+        assert!(!none.has_omega_ddot());
+    }
 
     #[test]
     fn sg_is_exact_on_polynomials_of_its_order_even_non_uniform() {
