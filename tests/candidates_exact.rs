@@ -212,6 +212,31 @@ fn per_rotor_ground_effect_columns_are_exact() {
 }
 
 #[test]
+fn second_order_inflow_columns_are_exact() {
+    // ΔT_i = ρπR² (c₁ V_h w_i + c₂ w_i²) at each rotor's Eq. 18 axial hub velocity
+    // w_i = w + p y_i − q x_i, summed over the airframe with each rotor's lever arm (a
+    // layout with rotors off the axes and one with rotors on them).
+    for preset in [Preset::QuadX, Preset::HexaPlus] {
+        let v = vehicle(preset);
+        let k = v.props.air_density * std::f64::consts::PI * v.props.rotor_radius.powi(2);
+        let (c1, c2) = (0.03, -0.02);
+        let e = check(&v, EffectKind::SecondOrderInflow, &[c1, c2], |s, b| {
+            let vh = s.velocity[0].hypot(s.velocity[1]);
+            let d: Vec<f64> = v
+                .rotors()
+                .iter()
+                .map(|r| {
+                    let w_i = s.velocity[2] + s.rates[0] * r.y - s.rates[1] * r.x;
+                    k * (c1 * vh * w_i + c2 * w_i * w_i)
+                })
+                .collect();
+            with_thrust_change(&v, b, &d)
+        });
+        assert!(e < 1e-9, "{preset:?}: {e:e}");
+    }
+}
+
+#[test]
 fn cg_offset_columns_are_exact() {
     let v = vehicle(Preset::QuadX);
     let d = [0.004, -0.008, 0.0];
