@@ -9,9 +9,21 @@
 
 use crate::model::{Column, ModelStructure, Signal, Term, term};
 use crate::sample::Axis;
-use crate::vehicle::Vehicle;
+use crate::vehicle::{Rotor, Vehicle};
 
 use super::local::Activity;
+
+/// One load of a thrust change: (axis, rotor i's signed lever arm in m (1 for the force),
+/// label prefix of the sum).
+type ThrustLoad = (Axis, fn(&Rotor) -> f64, &'static str);
+
+/// The loads of a change ΔT_i of rotor i's thrust (along −z_B, Eq. 13–15):
+/// F_z = −Σ ΔT_i, M_x = −Σ y_i ΔT_i, M_y = Σ x_i ΔT_i.
+const THRUST_LOADS: [ThrustLoad; 3] = [
+    (Axis::Fz, |_| -1.0, "-Sum "),
+    (Axis::Mx, |r| -r.y, "-Sum y_i*"),
+    (Axis::My, |r| r.x, "Sum x_i*"),
+];
 
 /// Which physical effect a candidate stands for (look-alikes are compared by kind).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -292,15 +304,14 @@ impl CandidateContext<'_> {
         factor: impl Fn(usize) -> Vec<Signal>,
         sign: f64,
     ) -> Vec<Column> {
-        let axes = [(Axis::Fz, -1.0, 0), (Axis::Mx, -1.0, 1), (Axis::My, 1.0, 2)];
-        axes.iter()
-            .map(|&(axis, s, arm)| {
+        THRUST_LOADS
+            .iter()
+            .map(|&(axis, lever, _)| {
                 let terms = rotors
                     .iter()
                     .flat_map(|&i| {
-                        let r = self.vehicle.rotors()[i];
-                        let lever = [1.0, r.y, r.x][arm];
-                        self.rotor_thrust(i, &factor(i), sign * s * lever, false)
+                        let arm = lever(&self.vehicle.rotors()[i]);
+                        self.rotor_thrust(i, &factor(i), sign * arm, false)
                     })
                     .filter(|t| t.coef != 0.0)
                     .collect();
@@ -1027,24 +1038,21 @@ fn second_order_inflow(ctx: &CandidateContext) -> Candidate {
     // Σ_i lever_i g_i as terms, g_i a polynomial in the hub velocity given as
     // (factors, per-rotor coefficient) pairs.
     let axis_terms = |monomials: &[(Vec<Signal>, Vec<f64>)]| {
-        let axes: [(Axis, f64, Vec<f64>); 3] = [
-            (Axis::Fz, -1.0, vec![1.0; rotors.len()]),
-            (Axis::Mx, -1.0, ys.clone()),
-            (Axis::My, 1.0, xs.clone()),
-        ];
-        axes.into_iter()
-            .map(|(axis, sign, lever)| {
-                let scale: f64 = lever.iter().map(|l| l.abs()).sum();
+        THRUST_LOADS
+            .iter()
+            .map(|&(axis, lever, label)| {
+                let arms: Vec<f64> = rotors.iter().map(lever).collect();
+                let scale: f64 = arms.iter().map(|l| l.abs()).sum();
                 let terms: Vec<Term> = monomials
                     .iter()
                     .filter_map(|(factors, c)| {
-                        let sum: f64 = lever.iter().zip(c).map(|(l, c)| l * c).sum();
-                        (sum.abs() > 1e-12 * scale).then(|| term(sign * k * sum, factors))
+                        let sum: f64 = arms.iter().zip(c).map(|(l, c)| l * c).sum();
+                        (sum.abs() > 1e-12 * scale).then(|| term(k * sum, factors))
                     })
                     .collect();
-                (axis, terms)
+                (axis, label, terms)
             })
-            .filter(|(_, t)| !t.is_empty())
+            .filter(|(_, _, t)| !t.is_empty())
             .collect::<Vec<_>>()
     };
     let one = vec![1.0; rotors.len()];
@@ -1065,9 +1073,9 @@ fn second_order_inflow(ctx: &CandidateContext) -> Candidate {
         (vec![P, Q], prod(&ys, &neg_x, 2.0)),
         (vec![Q, Q], prod(&xs, &xs, 1.0)),
     ]);
-    let columns = |list: Vec<(Axis, Vec<Term>)>, what: &str| {
+    let columns = |list: Vec<(Axis, &str, Vec<Term>)>, what: &str| {
         list.into_iter()
-            .map(|(axis, terms)| column(axis, &format!("{}{what}", axis_label(axis)), terms))
+            .map(|(axis, label, terms)| column(axis, &format!("{label}{what}"), terms))
             .collect()
     };
     Candidate {
@@ -1079,16 +1087,6 @@ fn second_order_inflow(ctx: &CandidateContext) -> Candidate {
             parameter("C_T_muvw", "-", columns(cross, "Vh*w_i")),
             parameter("C_T_w2", "-", columns(square, "w_i^2")),
         ],
-    }
-}
-
-/// Label prefix of a thrust-change column on `axis`: the lever arm and sign of
-/// F_z = −Σ ΔT_i, M_x = −Σ y_i ΔT_i, M_y = Σ x_i ΔT_i.
-fn axis_label(axis: Axis) -> &'static str {
-    match axis {
-        Axis::Fz => "-Sum ",
-        Axis::Mx => "-Sum y_i*",
-        _ => "Sum x_i*",
     }
 }
 
@@ -1112,11 +1110,16 @@ fn rotor_acceleration_thrust(ctx: &CandidateContext) -> Candidate {
         parameters: vec![parameter(
             "thrust_per_rotor_acceleration",
             "N s^2/rad",
-            vec![
-                column(Axis::Fz, "-Sum dOmega_i", axis_terms(&|_| -1.0)),
-                column(Axis::Mx, "-Sum y_i dOmega_i", axis_terms(&|i| -rotors[i].y)),
-                column(Axis::My, "Sum x_i dOmega_i", axis_terms(&|i| rotors[i].x)),
-            ],
+            THRUST_LOADS
+                .iter()
+                .map(|&(axis, lever, label)| {
+                    column(
+                        axis,
+                        &format!("{label}dOmega_i"),
+                        axis_terms(&|i| lever(&rotors[i])),
+                    )
+                })
+                .collect(),
         )],
     }
 }
