@@ -121,6 +121,11 @@ fn active_rows(values: &[f64], threshold: f64, rows: &mut Vec<usize>) {
     rows.extend((0..values.len()).filter(|&i| values[i].abs() >= threshold));
 }
 
+/// Fewest active held-out samples per fold for a gain where a candidate acts: the NRMSE
+/// there normalises by the output's range over those samples (none for one sample), and
+/// an RMSE from n samples is known to about 1/√(2n) (10 % at 50).
+pub const MIN_ACTIVE_SAMPLES: u64 = 50;
+
 /// The held-out statistics of one local candidate over the cross-validation folds.
 #[derive(Debug, Clone)]
 pub struct LocalFolds {
@@ -134,9 +139,9 @@ pub struct LocalFolds {
 
 impl LocalFolds {
     /// `tests[j]` the active held-out samples of fold j of `folds`; `None` when a fold
-    /// has none (the gain there cannot be measured).
+    /// has fewer than [`MIN_ACTIVE_SAMPLES`] (the gain there cannot be measured).
     pub fn new(candidate: usize, folds: &Folds, tests: Vec<Accumulator>) -> Option<Self> {
-        if tests.iter().any(|t| t.count() == 0) {
+        if tests.iter().any(|t| t.count() < MIN_ACTIVE_SAMPLES) {
             return None;
         }
         let active: u64 = tests.iter().map(Accumulator::count).sum();
@@ -152,6 +157,40 @@ impl LocalFolds {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::ModelOptions;
+    use crate::sim::test_matrix::{Design, Ranges, sweep};
+    use crate::sim::{Effects, RotorFile, TruthModel};
+    use crate::vehicle::Vehicle;
+
+    #[test]
+    fn a_fold_with_fewer_than_the_minimum_active_samples_has_no_local_gain() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let v = Vehicle::from_toml_file(&root.join("data/vehicles/quad_x.toml")).unwrap();
+        let effects = Effects::new(Vec::new(), &v).unwrap();
+        let truth = TruthModel::new(&v, &RotorFile::default(), effects).unwrap();
+        let all = sweep(
+            &truth,
+            &Ranges::scaled_to(&truth),
+            Design::LatinHypercube,
+            200,
+            1,
+        );
+        let s = ModelStructure::eq22(&v, ModelOptions::default());
+        let first = |n: usize| {
+            let mut c = SampleChunk::default();
+            c.extend_from(&all, 0..n);
+            let mut a = Accumulator::new(&s);
+            a.push(&s, &c, &mut Workspace::default()).unwrap();
+            a
+        };
+        let folds = Folds::holdout("held out", first(200), first(100));
+        let n = MIN_ACTIVE_SAMPLES as usize;
+        // One sample short: the gain where the candidate acts is not measured (a
+        // single active sample gave an infinite NRMSE, range 0, before the minimum).
+        assert!(LocalFolds::new(0, &folds, vec![first(n - 1)]).is_none());
+        let local = LocalFolds::new(0, &folds, vec![first(n)]).expect("enough samples");
+        assert_eq!(local.share, n as f64 / 100.0);
+    }
 
     #[test]
     fn the_active_rows_are_the_samples_at_or_above_the_threshold_in_order() {

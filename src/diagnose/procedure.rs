@@ -1192,7 +1192,7 @@ fn score(
             search.fit_options,
         )
         .ok()?;
-        Some(gains(before, &after))
+        Some(gains(before, &after)).filter(|g| g.iter().all(|x| x.is_finite()))
     });
     // The MMR couples the axes through shared parameters, so a candidate can pay on an
     // axis it has no column on (freeing a moment coefficient lets F_z fit itself):
