@@ -1,5 +1,6 @@
 //! Accumulates 1e6 quad× samples (full Eq. 22 model) on one thread, fits, and runs the
-//! residual pass (L = 10) over the same samples, printing the wall time of each. Run under `/usr/bin/time` to relate it to CPU time on a shared machine:
+//! residual pass (L = 10) over the same samples, printing the wall time of each. Run
+//! under `/usr/bin/time` to relate it to CPU time on a shared machine:
 //! `cargo run --release --example accumulate_rate`.
 
 use mrsysid::CHUNK_SAMPLES;
