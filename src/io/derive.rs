@@ -119,6 +119,64 @@ pub fn sg_derivative_weights(times: &[f64], k: usize, order: usize, w: &mut Vec<
     true
 }
 
+/// Windows whose time offsets from their centre sample all lie within this fraction of
+/// the window's span of those of the window the weights were last computed for reuse
+/// those weights ([`SgWeights`]).
+pub const SG_REUSE_TOLERANCE: f64 = 1e-9;
+
+/// Savitzky–Golay derivative weights ([`sg_derivative_weights`]) with the last ones
+/// kept for the next window of the same shape. On a uniformly sampled log every window
+/// is the same up to the rounding of its time stamps (parsed decimal times jitter by an
+/// ulp of t: 4e-12 s at t = 2.5e4 s, 3e-10 of the half-width of an 11-sample window at
+/// 400 Hz), so the weights are computed at segment ends and reused in between instead
+/// of a normal-equation solve per sample (12 % of a `fit --no-diagnose` profile).
+/// Reuse is judged against the window the weights were computed for, never a reused
+/// one, so the difference cannot drift: a reused weight differs from a recomputed one
+/// by about [`SG_REUSE_TOLERANCE`] of its size at most.
+#[derive(Debug, Default, Clone)]
+pub struct SgWeights {
+    /// t_j − t_k of the window the weights were computed for, s.
+    offsets: Vec<f64>,
+    /// Its largest |t_j − t_k|, s.
+    span: f64,
+    /// Its centre index k and polynomial order.
+    centre: usize,
+    order: usize,
+    weights: Vec<f64>,
+}
+
+impl SgWeights {
+    /// The weights of the derivative at `times[k]` (see [`sg_derivative_weights`]), or
+    /// `None` when that fit is singular.
+    pub fn get(&mut self, times: &[f64], k: usize, order: usize) -> Option<&[f64]> {
+        let t0 = times[k];
+        let same = !self.weights.is_empty()
+            && self.centre == k
+            && self.order == order
+            && self.offsets.len() == times.len()
+            && times
+                .iter()
+                .zip(&self.offsets)
+                .all(|(t, o)| ((t - t0) - o).abs() <= SG_REUSE_TOLERANCE * self.span);
+        if !same {
+            if !sg_derivative_weights(times, k, order, &mut self.weights) {
+                self.weights.clear();
+                return None;
+            }
+            self.offsets.clear();
+            self.offsets.extend(times.iter().map(|t| t - t0));
+            self.span = self.offsets.iter().fold(0.0, |m, o| o.abs().max(m));
+            (self.centre, self.order) = (k, order);
+        }
+        Some(&self.weights)
+    }
+
+    /// Forgets the kept weights (the next window computes its own).
+    pub fn clear(&mut self) {
+        self.weights.clear();
+    }
+}
+
 /// A sample interval longer than this many times a chunk's median interval is a gap (a
 /// join of the reader's segments): Ω̈ is never differentiated across it.
 const JERK_GAP_FACTOR: f64 = 3.0;
@@ -127,7 +185,7 @@ const JERK_GAP_FACTOR: f64 = 3.0;
 #[derive(Debug, Default)]
 pub struct JerkScratch {
     intervals: Vec<f64>,
-    weights: Vec<f64>,
+    weights: SgWeights,
 }
 
 /// Fills `chunk.omega_ddot` with Ω̈_i, rad/s³: the Savitzky–Golay derivative (window
@@ -152,6 +210,8 @@ pub fn rotor_jerk(chunk: &mut SampleChunk, options: &DeriveOptions, scratch: &mu
         return;
     }
     let JerkScratch { intervals, weights } = scratch;
+    // Ω̈ stays a function of the chunk alone: no weights carried over from the last one.
+    weights.clear();
     intervals.clear();
     intervals.extend(t.windows(2).map(|w| w[1] - w[0]));
     let mid = intervals.len() / 2;
@@ -167,9 +227,9 @@ pub fn rotor_jerk(chunk: &mut SampleChunk, options: &DeriveOptions, scratch: &mu
                 .saturating_sub(options.sg_window / 2)
                 .clamp(start, end - width);
             let times = &t[lo..lo + width];
-            if !sg_derivative_weights(times, k - lo, options.sg_order, weights) {
+            let Some(weights) = weights.get(times, k - lo, options.sg_order) else {
                 continue;
-            }
+            };
             for (dst, src) in omega_ddot.iter_mut().zip(omega_dot.iter()) {
                 dst[k] = weights.iter().zip(&src[lo..]).map(|(w, x)| w * x).sum();
             }
@@ -375,5 +435,68 @@ mod tests {
         for k in 0..4 {
             assert!((back[k] - q[k]).abs() < 1e-15 * 4.0, "{back:?} vs {q:?}");
         }
+    }
+
+    /// Kept weights are reused only for windows within [`SG_REUSE_TOLERANCE`] of the one
+    /// they were computed for: on 400 Hz stamps parsed from 6-decimal text far into a
+    /// log (jitter ~1e-12 s) every interior window reuses them and matches its own
+    /// weights to 1e-8 (relative to the largest weight); a window stretched by 1e-6 of
+    /// its span, or a different centre, computes its own (exactly
+    /// [`sg_derivative_weights`]); and a drift of 0.6 × the tolerance per window is
+    /// measured from the computed window, so the second step recomputes.
+    #[test]
+    fn kept_weights_serve_only_windows_of_the_same_shape() {
+        let stamps: Vec<f64> = (0..200)
+            .map(|i| {
+                format!("{:.6}", 25_000.0 + i as f64 * 0.0025)
+                    .parse()
+                    .unwrap()
+            })
+            .collect();
+        let mut kept = SgWeights::default();
+        let mut own = Vec::new();
+        let first = kept.get(&stamps[..11], 5, 2).unwrap().to_vec();
+        for lo in 0..190 {
+            let times = &stamps[lo..lo + 11];
+            let w = kept.get(times, 5, 2).unwrap().to_vec();
+            assert_eq!(w, first, "window {lo} reuses the weights");
+            assert!(sg_derivative_weights(times, 5, 2, &mut own));
+            let big = own.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+            for (a, b) in w.iter().zip(&own) {
+                assert!((a - b).abs() < 1e-8 * big, "{a} vs {b} at {lo}");
+            }
+        }
+
+        let uniform: Vec<f64> = (0..11).map(|i| i as f64 * 0.0025).collect();
+        let stretched: Vec<f64> = uniform.iter().map(|t| t * (1.0 + 1e-6)).collect();
+        let mut kept = SgWeights::default();
+        for (times, k) in [(&uniform, 5), (&stretched, 5), (&uniform, 4)] {
+            let w = kept.get(times, k, 2).unwrap().to_vec();
+            assert!(sg_derivative_weights(times, k, 2, &mut own));
+            assert_eq!(w, own, "computed, not reused");
+        }
+
+        let span = 0.0125; // the largest |t_j − t_k|
+        let drift = 0.6 * SG_REUSE_TOLERANCE * span;
+        let mut kept = SgWeights::default();
+        kept.get(&uniform, 5, 2).unwrap();
+        let step = |m: f64| -> Vec<f64> {
+            uniform
+                .iter()
+                .enumerate()
+                .map(|(i, t)| t + m * drift * (i == 10) as u8 as f64)
+                .collect()
+        };
+        let first = kept.get(&step(1.0), 5, 2).unwrap().to_vec();
+        assert_eq!(
+            kept.offsets[10],
+            uniform[10] - uniform[5],
+            "within tolerance: reused"
+        );
+        let second = kept.get(&step(2.0), 5, 2).unwrap().to_vec();
+        assert_ne!(
+            first, second,
+            "1.2 × the tolerance from the computed window: recomputed"
+        );
     }
 }

@@ -36,9 +36,7 @@ pub use error::{ErrorKind, IoError, Location};
 pub use layout::LayoutReport;
 pub use mapping::Mapping;
 
-use derive::{
-    body_velocity, euler_moment, matrix_to_quat, sg_derivative_weights, specific_force_at_cg,
-};
+use derive::{SgWeights, body_velocity, euler_moment, matrix_to_quat, specific_force_at_cg};
 use mapping::{AxisMap, Signal};
 use slots::SlotLayout;
 use validate::{
@@ -270,7 +268,7 @@ pub struct LogReader {
     layout_acc: layout::LayoutAccumulator,
     unit_stats: UnitStats,
     times: Vec<f64>,
-    weights: Vec<f64>,
+    weights: SgWeights,
     is_mcap: bool,
     actuator: Option<mapping::ActuatorMap>,
 }
@@ -512,7 +510,7 @@ impl LogReader {
             layout_acc: layout::LayoutAccumulator::new(rotors, plan.has_omega_dot),
             unit_stats: UnitStats::default(),
             times: Vec::new(),
-            weights: Vec::new(),
+            weights: SgWeights::default(),
             is_mcap,
             actuator,
         }
@@ -789,7 +787,7 @@ impl LogReader {
             self.times.clear();
             self.times
                 .extend(self.window.range(lo..lo + w).map(|r| r.t));
-            if !sg_derivative_weights(&self.times, k - lo, d.sg_order, &mut self.weights) {
+            let Some(wts) = self.weights.get(&self.times, k - lo, d.sg_order) else {
                 let msg = format!(
                     "{}: {}: segment of {len} samples is too short to differentiate (sg_order {})",
                     self.summary.file,
@@ -798,8 +796,7 @@ impl LogReader {
                 );
                 self.count_drop("segment too short to differentiate", msg);
                 return;
-            }
-            let wts = &self.weights;
+            };
             let win = self.window.range(lo..lo + w);
             if self.plan.diff_rates {
                 ang_acc = [0.0; 3];
