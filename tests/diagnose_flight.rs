@@ -45,6 +45,26 @@ fn diagnose_flight(effects: &[&str], duration: f64, near_ground: f64, seed: u64)
     results.outcome().diagnosis.clone().unwrap()
 }
 
+/// The ground effect the diagnosis added, which must be the per-rotor-height form.
+fn per_rotor_ground_effect(d: &Diagnosis) -> &mrsysid::diagnose::CandidateScore {
+    let e = d
+        .effects_added
+        .iter()
+        .find(|e| e.kind == EffectKind::GroundEffect)
+        .unwrap_or_else(|| panic!("no ground effect: {:#?}", d.findings));
+    assert_eq!(e.name, "ground effect, per-rotor height");
+    e
+}
+
+/// Estimate and σ of the per-rotor ground-effect scale in the final model.
+fn final_ground_effect_scale(d: &Diagnosis) -> (f64, f64) {
+    let i = d
+        .structure
+        .param_index("ground_effect_scale_per_rotor")
+        .expect("in the final model");
+    (d.theta[i], d.std[i])
+}
+
 /// The first 30 s of a 60 s flight swing the rotor plane between 1 and 4 diameters
 /// above the ground (under half the log within 4 diameters: 34 % measured), then the
 /// vehicle climbs away. Cheeseman–Bennett ground effect on each rotor at its own height
@@ -57,12 +77,7 @@ fn diagnose_flight(effects: &[&str], duration: f64, near_ground: f64, seed: u64)
 fn ground_effect_in_a_partly_low_flight_is_found_in_its_per_rotor_form() {
     let d = diagnose_flight(&["ground_effect=1"], 60.0, 30.0, 14_000);
     println!("{:#?}", d.findings);
-    let e = d
-        .effects_added
-        .iter()
-        .find(|e| e.kind == EffectKind::GroundEffect)
-        .unwrap_or_else(|| panic!("no ground effect: {:#?}", d.findings));
-    assert_eq!(e.name, "ground effect, per-rotor height");
+    let e = per_rotor_ground_effect(&d);
     assert!(e.active_share < 0.5, "acts on {}", e.active_share);
     let local = e.local_gain.expect("judged where it acts");
     // Where it acts the thrust and moments are much better predicted (51–86 % measured).
@@ -70,11 +85,7 @@ fn ground_effect_in_a_partly_low_flight_is_found_in_its_per_rotor_form() {
     // Cheeseman–Bennett is the truth's law: the scale in the final model (after the
     // completions that follow it) within 25 % of 1 (1.01 ± 0.07 measured; 0.61 when
     // added, before the in-plane force lever arm and rate damping).
-    let i = d
-        .structure
-        .param_index("ground_effect_scale_per_rotor")
-        .expect("in the final model");
-    let (k, std) = (d.theta[i], d.std[i]);
+    let (k, std) = final_ground_effect_scale(&d);
     println!(
         "scale {k} ± {std} (when added {})",
         e.parameters[0].estimate
@@ -93,25 +104,12 @@ fn ground_effect_in_a_partly_low_flight_is_found_in_its_per_rotor_form() {
 fn ground_effect_with_few_active_held_out_samples_is_judged_on_all_of_them() {
     let d = diagnose_flight(&["ground_effect=1"], 60.0, 0.0, 14_008);
     println!("{:#?}", d.findings);
-    let e = d
-        .effects_added
-        .iter()
-        .find(|e| e.kind == EffectKind::GroundEffect)
-        .unwrap_or_else(|| panic!("no ground effect: {:#?}", d.findings));
-    assert_eq!(e.name, "ground effect, per-rotor height");
+    let e = per_rotor_ground_effect(&d);
     assert!(e.local_gain.is_none(), "{:?}", e.local_gain);
     // Cheeseman–Bennett is the truth's law: scale in the final model within 0.15 of 1
     // (1.04 ± 0.04 measured).
-    let i = d
-        .structure
-        .param_index("ground_effect_scale_per_rotor")
-        .expect("in the final model");
-    assert!(
-        (d.theta[i] - 1.0).abs() < 0.15,
-        "{} ± {}",
-        d.theta[i],
-        d.std[i]
-    );
+    let (k, std) = final_ground_effect_scale(&d);
+    assert!((k - 1.0).abs() < 0.15, "{k} ± {std}");
 }
 
 /// A clean 30 s flight at a seed where the in-plane force lever arm (a completion of
