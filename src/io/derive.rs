@@ -119,9 +119,9 @@ pub fn sg_derivative_weights(times: &[f64], k: usize, order: usize, w: &mut Vec<
     true
 }
 
-/// Windows whose time offsets from their centre sample all lie within this fraction of
-/// the window's span of those of the window the weights were last computed for reuse
-/// those weights ([`SgWeights`]).
+/// A window reuses the weights of the window they were last computed for when each of
+/// its time offsets from its centre sample lies within this fraction of that window's
+/// largest offset of the corresponding one ([`SgWeights`]).
 pub const SG_REUSE_TOLERANCE: f64 = 1e-9;
 
 /// Savitzky–Golay derivative weights ([`sg_derivative_weights`]) with the last ones
@@ -484,7 +484,7 @@ mod tests {
             uniform
                 .iter()
                 .enumerate()
-                .map(|(i, t)| t + m * drift * (i == 10) as u8 as f64)
+                .map(|(i, t)| if i == 10 { t + m * drift } else { *t })
                 .collect()
         };
         let first = kept.get(&step(1.0), 5, 2).unwrap().to_vec();
