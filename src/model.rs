@@ -697,7 +697,7 @@ impl ModelStructure {
             Vh => {
                 let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
                 for ((d, &a), &b) in dst.iter_mut().zip(u).zip(v) {
-                    *d = (a * a + b * b).sqrt();
+                    *d = in_plane_speed(a, b);
                 }
             }
             Dt | Da | De | Dr => {
@@ -767,7 +767,7 @@ impl ModelStructure {
                 let omega = &chunk.omega[usize::from(i)][..n];
                 let r = self.rotor_radius;
                 for (k, d) in dst.iter_mut().enumerate() {
-                    let vh = u[k].hypot(v[k]);
+                    let vh = in_plane_speed(u[k], v[k]);
                     let mu = if omega[k] > 0.0 {
                         vh / (omega[k] * r)
                     } else {
@@ -780,7 +780,7 @@ impl ModelStructure {
                 let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
                 let along = if s == UOverVh { u } else { v };
                 for (k, d) in dst.iter_mut().enumerate() {
-                    let vh = u[k].hypot(v[k]);
+                    let vh = in_plane_speed(u[k], v[k]);
                     *d = if vh > 0.0 { along[k] / vh } else { 0.0 };
                 }
             }
@@ -801,7 +801,7 @@ impl ModelStructure {
                 let (p, q) = (&chunk.rates[0][..n], &chunk.rates[1][..n]);
                 for (k, d) in dst.iter_mut().enumerate() {
                     let descent = w[k] + p[k] * y - q[k] * x;
-                    *d = vortex_ring_onset(descent, u[k].hypot(v[k]), self.nu0);
+                    *d = vortex_ring_onset(descent, in_plane_speed(u[k], v[k]), self.nu0);
                 }
             }
         }
@@ -1318,7 +1318,7 @@ pub fn ground_effect_factor(rotor_radius: f64, rotor_height: f64) -> f64 {
 /// Overlap of rotor `i` with the wakes of the rotors upstream of it at in-plane
 /// velocity (u, v), capped at 1 (see [`Signal::WakeImmersion`]).
 fn wake_overlap(hubs: &[[f64; 2]], i: usize, radius: f64, u: f64, v: f64) -> f64 {
-    let vh = u.hypot(v);
+    let vh = in_plane_speed(u, v);
     if vh == 0.0 {
         return 0.0;
     }
@@ -1348,7 +1348,21 @@ fn wake_overlap(hubs: &[[f64; 2]], i: usize, radius: f64, u: f64, v: f64) -> f64
 fn vortex_ring_onset(descent: f64, vh: f64, nu0: f64) -> f64 {
     let x = (descent / nu0 - 1.0) / 0.5;
     let y = vh / nu0;
-    (-(x * x + y * y)).exp()
+    let exponent = x * x + y * y;
+    // exp(−746) is 0 in f64; libm reaches it through its slow underflow path (most
+    // samples of a fast flight are far from the vortex-ring state).
+    if exponent > 746.0 {
+        0.0
+    } else {
+        (-exponent).exp()
+    }
+}
+
+/// In-plane airspeed V_h = √(u² + v²), m/s. Plain square root of the sum rather than
+/// `hypot` (several times slower, guarding against overflow that body velocities in m/s
+/// cannot reach).
+fn in_plane_speed(u: f64, v: f64) -> f64 {
+    (u * u + v * v).sqrt()
 }
 
 /// The values of signal `s` for the `n` samples of `chunk`; computed signals live at

@@ -21,19 +21,19 @@
 //! shapes, and column j is read as `scale_j` × its shape's column of R (R of [X D] is R D
 //! for diagonal D). For quadrotor× this is 30 instead of 38 columns, ~1.5× less work.
 //!
-//! Each chunk is folded in by a blocked Householder QR (faer) of R stacked on the chunk,
-//! and two accumulators merge by a QR of [R_a; R_b]: a TSQR tree, so chunks, files and
-//! threads combine in any grouping with rounding-level differences only. Memory is
-//! O(q²) whatever the sample count. Cost: ~2q² flops per sample (q = 36 for the quad×
-//! model), the price of QR-grade accuracy over a Gram update's q².
+//! Each chunk is folded in by a blocked Householder QR of R stacked on the chunk that
+//! leaves R's zeros alone ([`triangular_update`]), and two accumulators merge by the same
+//! QR of [R_a; R_b]: a TSQR tree, so chunks, files and threads combine in any grouping
+//! with rounding-level differences only. Memory is O(q²) whatever the sample count.
+//! Cost: ~2q² flops per sample (q = 36 for the quad× model), the price of QR-grade
+//! accuracy over a Gram update's q².
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::qr::no_pivoting::factor::{
-    qr_in_place, qr_in_place_scratch, recommended_block_size,
-};
+mod triangular_update;
+
 use std::hash::{DefaultHasher, Hasher};
 
-use faer::{Mat, MatMut, Par};
+use faer::{Mat, MatMut};
+pub(crate) use triangular_update::{FoldScratch, fold_rows};
 
 use crate::model::{ModelError, ModelStructure, Workspace};
 use crate::sample::{Axis, SampleChunk};
@@ -117,48 +117,9 @@ fn insert_distinct(set: &mut Vec<u64>, h: u64) {
 
 /// Scratch buffers for folding chunks into an [`Accumulator`].
 struct Stacked {
+    /// The rows to fold in (chunk rows, or another accumulator's R).
     a: Mat<f64>,
-    qr: QrScratch,
-}
-
-/// Reusable scratch of [`householder_qr`]: block reflectors and faer's work memory (for
-/// the shape and block size in `key`).
-pub(crate) struct QrScratch {
-    h: Mat<f64>,
-    mem: Option<MemBuffer>,
-    key: (usize, usize, usize),
-}
-
-impl QrScratch {
-    pub(crate) const fn new() -> Self {
-        Self {
-            h: Mat::new(),
-            mem: None,
-            key: (0, 0, 0),
-        }
-    }
-}
-
-/// Householder QR of `a` (rows × m) in place, on the calling thread (`Par::Seq`: faer's
-/// convenience `Mat::qr` would take its global rayon pool): R in the upper triangle.
-pub(crate) fn householder_qr(a: MatMut<'_, f64>, s: &mut QrScratch) {
-    let (rows, m) = a.shape();
-    let bs = recommended_block_size::<f64>(rows, m);
-    s.h.resize_with(bs, m.min(rows), |_, _| 0.0);
-    let key = (rows, m, bs);
-    if s.mem.is_none() || s.key != key {
-        let need = qr_in_place_scratch::<f64>(rows, m, bs, Par::Seq, Default::default());
-        s.mem = Some(MemBuffer::new(need));
-        s.key = key;
-    }
-    let mem = s.mem.as_mut().expect("allocated above");
-    qr_in_place(
-        a,
-        s.h.as_mut(),
-        Par::Seq,
-        MemStack::new(mem),
-        Default::default(),
-    );
+    fold: FoldScratch,
 }
 
 impl Accumulator {
@@ -251,13 +212,12 @@ impl Accumulator {
             *m = (m.0.min(lo), m.1.max(hi));
         }
         STACKED.with_borrow_mut(|s| {
-            s.a.resize_with(q + n, q, |_, _| 0.0);
+            s.a.resize_with(n, q, |_, _| 0.0);
             for j in 0..q {
-                let dst = s.a.col_as_slice_mut(j);
-                dst[..q].copy_from_slice(&self.r[j * q..(j + 1) * q]);
-                dst[q..].copy_from_slice(self.data_column(ws, j));
+                s.a.col_as_slice_mut(j)
+                    .copy_from_slice(self.data_column(ws, j));
             }
-            self.r = triangular_factor(s);
+            fold_into(&mut self.r, s);
         });
         self.count += n as u64;
         Ok(())
@@ -300,14 +260,12 @@ impl Accumulator {
             *m = (m.0.min(o.0), m.1.max(o.1));
         }
         STACKED.with_borrow_mut(|s| {
-            s.a.resize_with(2 * q, q, |_, _| 0.0);
+            s.a.resize_with(q, q, |_, _| 0.0);
             for j in 0..q {
-                for i in 0..q {
-                    s.a[(i, j)] = self.r[j * q + i];
-                    s.a[(q + i, j)] = other.r[j * q + i];
-                }
+                s.a.col_as_slice_mut(j)
+                    .copy_from_slice(&other.r[j * q..(j + 1) * q]);
             }
-            self.r = triangular_factor(s);
+            fold_into(&mut self.r, s);
         });
         self.count += other.count;
         Ok(())
@@ -508,23 +466,17 @@ fn column_field(c: &crate::model::Column) -> String {
 thread_local! {
     static STACKED: std::cell::RefCell<Stacked> = const { std::cell::RefCell::new(Stacked {
         a: Mat::new(),
-        qr: QrScratch::new(),
+        fold: FoldScratch::new(),
     }) };
 }
 
-/// Householder QR of `s.a` (rows × m) in place; returns the upper-triangular m × m
-/// factor (column-major) with non-negative diagonal.
-fn triangular_factor(s: &mut Stacked) -> Vec<f64> {
-    let (rows, m) = s.a.shape();
-    householder_qr(s.a.as_mut(), &mut s.qr);
-    let mut r = vec![0.0; m * m];
-    for i in 0..m.min(rows) {
-        let sign = if s.a[(i, i)] < 0.0 { -1.0 } else { 1.0 };
-        for j in i..m {
-            r[j * m + i] = sign * s.a[(i, j)];
-        }
-    }
-    r
+/// Replaces `r` (q × q upper triangular, column-major, q = the columns of `s.a`) by the
+/// triangular factor, with non-negative diagonal, of `r` stacked on the rows of `s.a`
+/// (which are overwritten).
+fn fold_into(r: &mut [f64], s: &mut Stacked) {
+    let q = s.a.ncols();
+    let r = MatMut::from_column_major_slice_mut(r, q, q);
+    fold_rows(r, s.a.as_mut(), &mut s.fold);
 }
 
 impl Accumulator {
@@ -564,7 +516,10 @@ impl Accumulator {
                     *d = f0 * v;
                 }
             }
-            triangular_factor(s)
+            // The QR of R[:, S] alone: folded into a zero factor.
+            let mut r = vec![0.0; k * k];
+            fold_into(&mut r, s);
+            r
         });
         let scaled = |u: usize, f0: f64, lower: bool| {
             let (lo, hi) = (f0 * self.min[u], f0 * self.max[u]);

@@ -1,4 +1,4 @@
-//! Small dense least squares by equilibrated Householder QR (faer), with the rank and
+//! Small dense least squares by equilibrated Householder QR, with the rank and
 //! conditioning information the identifiability report needs.
 //!
 //! Every estimator of this module works on a compressed design: rows of the accumulated
@@ -14,7 +14,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::svd::{ComputeSvdVectors, svd, svd_scratch};
 use faer::{Mat, Par};
 
-use crate::stats::{QrScratch, householder_qr};
+use crate::stats::{FoldScratch, fold_rows};
 
 /// Solution of min ‖X θ − z‖ for a small dense X of full column rank.
 #[derive(Debug, Clone)]
@@ -167,12 +167,13 @@ pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
     }
 }
 
-/// The upper-triangular factor R of a Householder QR of `a` (rows ≥ columns), on this
-/// thread.
+/// The upper-triangular factor R (non-negative diagonal) of a Householder QR of `a`
+/// (rows ≥ columns), on this thread.
 fn triangular_factor(mut a: Mat<f64>) -> Mat<f64> {
     let n = a.ncols();
-    householder_qr(a.as_mut(), &mut QrScratch::new());
-    Mat::from_fn(n, n, |i, j| if j >= i { a[(i, j)] } else { 0.0 })
+    let mut r = Mat::zeros(n, n);
+    fold_rows(r.as_mut(), a.as_mut(), &mut FoldScratch::new());
+    r
 }
 
 /// Singular values (unsorted) and right singular vectors (columns) of square `r`, on this
