@@ -20,7 +20,7 @@ use crate::CHUNK_SAMPLES;
 use crate::diagnose::local::{LocalFolds, LocalRegions};
 use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
-    SCREENING_SAMPLES, Thinned, candidate_set, diagnose,
+    SCREENING_SAMPLES, Thinned, candidate_set_on_threads, diagnose_on_threads,
 };
 use crate::error::{Error, RequestError};
 use crate::estimate::{
@@ -761,7 +761,7 @@ impl Extended {
             has_omega_ddot: signals.omega_ddot,
             has_attitude: signals.attitude,
         };
-        let set = candidate_set(&ctx, Some(screening), options)?;
+        let set = candidate_set_on_threads(&ctx, Some(screening), options, req.threads)?;
         Ok(Self {
             structure: set.extended,
             candidates: set.candidates,
@@ -906,7 +906,12 @@ fn second_pass(
         report: (report.count() > 0).then_some(&report),
         local: &local,
     };
-    out.diagnosis = Some(diagnose(&stats, &req.fit, &options)?);
+    out.diagnosis = Some(diagnose_on_threads(
+        &stats,
+        &req.fit,
+        &options,
+        req.threads,
+    )?);
     Ok(())
 }
 

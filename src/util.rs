@@ -76,3 +76,63 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         let _ = std::fs::remove_file(&tmp);
     })
 }
+
+/// `f` of every item, in item order, on up to `threads` threads: free threads take the
+/// next item in turn, so the result does not depend on `threads` (nor on scheduling)
+/// when `f` is a function of its item alone.
+pub(crate) fn map_on_threads<T: Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    f: impl Fn(&T) -> R + Sync,
+) -> Vec<R> {
+    let workers = threads.clamp(1, items.len().max(1));
+    if workers == 1 {
+        return items.iter().map(f).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<std::sync::Mutex<Option<R>>> =
+        items.iter().map(|_| Default::default()).collect();
+    let work = || {
+        loop {
+            let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let Some(item) = items.get(i) else {
+                break;
+            };
+            let r = f(item);
+            *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some(r);
+        }
+    };
+    std::thread::scope(|scope| {
+        for _ in 1..workers {
+            scope.spawn(work);
+        }
+        work();
+    });
+    // A worker that panicked re-raised its panic at the end of the scope, so every slot
+    // holds its result here.
+    slots
+        .into_iter()
+        .filter_map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mapping_on_threads_keeps_item_order_for_any_thread_count() {
+        let items: Vec<u64> = (0..1000).collect();
+        // Uneven work, so threads finish items out of order.
+        let f = |&x: &u64| (0..(x % 7) * 1000).fold(x, |a, b| a.wrapping_mul(31).wrapping_add(b));
+        let serial: Vec<u64> = items.iter().map(f).collect();
+        for threads in [0, 1, 2, 3, 8, 2000] {
+            assert_eq!(
+                map_on_threads(&items, threads, f),
+                serial,
+                "{threads} threads"
+            );
+        }
+        assert!(map_on_threads(&[] as &[u64], 4, f).is_empty());
+    }
+}

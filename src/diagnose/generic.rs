@@ -30,7 +30,7 @@
 use super::candidates::{Candidate, CandidateParameter, EffectKind};
 use crate::model::{Column, ModelError, ModelStructure, Parameter, Signal, Workspace, term};
 use crate::sample::{Axis, SampleChunk};
-use crate::util::dot;
+use crate::util::{dot, map_on_threads};
 
 /// The pool's variables: states and virtual actuators.
 const VARIABLES: [(Signal, &str); 10] = [
@@ -73,6 +73,8 @@ pub struct ScreeningOptions {
     pub min_drop: f64,
     /// Most monomials kept per axis.
     pub per_axis: usize,
+    /// Threads the axes are screened on (the survivors do not depend on it).
+    pub threads: usize,
 }
 
 impl Default for ScreeningOptions {
@@ -81,6 +83,7 @@ impl Default for ScreeningOptions {
             alpha: 0.01,
             min_drop: 0.05,
             per_axis: 2,
+            threads: 1,
         }
     }
 }
@@ -263,63 +266,82 @@ pub fn screen(
     data: &SampleChunk,
     options: &ScreeningOptions,
 ) -> Result<Vec<Screened>, ModelError> {
-    let n = data.len();
     let needs_omega_dot = |m: &Vec<Signal>| m.iter().any(|s| matches!(s, Signal::ActuatorRate(_)));
     let pool: Vec<Vec<Signal>> = monomials()
         .into_iter()
         .filter(|m| data.has_omega_dot() || !needs_omega_dot(m))
         .collect();
-    let mut ws = Workspace::default();
-    let mut monomials = MonomialBlocks::new(extended, &pool, data);
     let tests = (pool.len() * Axis::ALL.len()) as f64;
+    let per_axis = map_on_threads(&Axis::ALL, options.threads, |&axis| {
+        screen_axis(extended, data, &pool, axis, tests, options)
+    });
     let mut out = Vec::new();
-    for axis in Axis::ALL {
-        // This axis's columns only: memory holds one axis's share of the regressors.
-        let columns: Vec<usize> = extended.axis_columns(axis).collect();
-        let on_axis = extended.select_columns(&columns);
-        on_axis.assemble(data, &mut ws)?;
-        let mut basis = Basis { q: Vec::new() };
-        for j in 0..columns.len() {
-            basis.add(ws.column(j));
+    for survivors in per_axis {
+        out.extend(survivors?);
+    }
+    Ok(out)
+}
+
+/// The screening of one axis: up to [`ScreeningOptions::per_axis`] monomials of `pool`,
+/// chosen one at a time by the largest drop of the residual sum of squares of the axis's
+/// own columns and the monomials before, while significant over `tests` tests.
+fn screen_axis(
+    extended: &ModelStructure,
+    data: &SampleChunk,
+    pool: &[Vec<Signal>],
+    axis: Axis,
+    tests: f64,
+    options: &ScreeningOptions,
+) -> Result<Vec<Screened>, ModelError> {
+    let n = data.len();
+    let mut ws = Workspace::default();
+    let mut monomials = MonomialBlocks::new(extended, pool, data);
+    let mut out = Vec::new();
+    // This axis's columns only: memory holds one axis's share of the regressors.
+    let columns: Vec<usize> = extended.axis_columns(axis).collect();
+    let on_axis = extended.select_columns(&columns);
+    on_axis.assemble(data, &mut ws)?;
+    let mut basis = Basis { q: Vec::new() };
+    for j in 0..columns.len() {
+        basis.add(ws.column(j));
+    }
+    let mut r = basis.residual(ws.output(axis));
+    for _ in 0..options.per_axis {
+        let sse = dot(&r, &r);
+        let dof = n as f64 - basis.q.len() as f64 - 1.0;
+        if dof < 1.0 || sse <= 0.0 {
+            break;
         }
-        let mut r = basis.residual(ws.output(axis));
-        for _ in 0..options.per_axis {
-            let sse = dot(&r, &r);
-            let dof = n as f64 - basis.q.len() as f64 - 1.0;
-            if dof < 1.0 || sse <= 0.0 {
-                break;
-            }
-            // The largest gain (the last of equal ones), over monomials that are not
-            // already in the span of the basis.
-            let mut best: Option<(usize, f64)> = None;
-            monomials.for_each(|j, g| {
-                let g2 = basis.orthogonal_norm2(g);
-                if g2 > 1e-9 * dot(g, g) {
-                    let gain = dot(g, &r).powi(2) / g2;
-                    if best.is_none_or(|(_, b)| gain.total_cmp(&b).is_ge()) {
-                        best = Some((j, gain));
-                    }
+        // The largest gain (the last of equal ones), over monomials that are not
+        // already in the span of the basis.
+        let mut best: Option<(usize, f64)> = None;
+        monomials.for_each(|j, g| {
+            let g2 = basis.orthogonal_norm2(g);
+            if g2 > 1e-9 * dot(g, g) {
+                let gain = dot(g, &r).powi(2) / g2;
+                if best.is_none_or(|(_, b)| gain.total_cmp(&b).is_ge()) {
+                    best = Some((j, gain));
                 }
-            })?;
-            let Some((j, gain)) = best else { break };
-            let f = gain / ((sse - gain).max(f64::MIN_POSITIVE) / dof);
-            let p = (f_survival(f, dof) * tests).min(1.0);
-            let drop = gain / sse;
-            if !(p < options.alpha && drop >= options.min_drop) {
-                break;
             }
-            let g = &monomials.values(j)?;
-            out.push(Screened {
-                axis,
-                label: label(&pool[j]),
-                drop,
-                p,
-                rms: (dot(g, g) / n as f64).sqrt(),
-                factors: pool[j].clone(),
-            });
-            basis.add(g);
-            r = basis.residual(&r);
+        })?;
+        let Some((j, gain)) = best else { break };
+        let f = gain / ((sse - gain).max(f64::MIN_POSITIVE) / dof);
+        let p = (f_survival(f, dof) * tests).min(1.0);
+        let drop = gain / sse;
+        if !(p < options.alpha && drop >= options.min_drop) {
+            break;
         }
+        let g = &monomials.values(j)?;
+        out.push(Screened {
+            axis,
+            label: label(&pool[j]),
+            drop,
+            p,
+            rms: (dot(g, g) / n as f64).sqrt(),
+            factors: pool[j].clone(),
+        });
+        basis.add(g);
+        r = basis.residual(&r);
     }
     Ok(out)
 }

@@ -11,7 +11,7 @@ pub use candidates::{Candidate, CandidateContext, CandidateParameter, EffectKind
 pub use generic::{SCREENING_SAMPLES, Thinned};
 pub use procedure::{
     CandidateScore, CandidateStatistics, DiagnoseError, DiagnoseOptions, Diagnosis, DiagnosisStep,
-    EffectParameter, Rejection, diagnose, diagnose_chunks,
+    EffectParameter, Rejection, diagnose, diagnose_chunks, diagnose_on_threads,
 };
 
 use crate::model::{ModelError, ModelStructure, Parameter};
@@ -36,6 +36,17 @@ pub fn candidate_set(
     screening_data: Option<&SampleChunk>,
     options: &DiagnoseOptions,
 ) -> Result<CandidateSet, ModelError> {
+    candidate_set_on_threads(ctx, screening_data, options, 1)
+}
+
+/// [`candidate_set`] with the screening's axes on up to `threads` threads (the set does
+/// not depend on `threads`).
+pub fn candidate_set_on_threads(
+    ctx: &CandidateContext,
+    screening_data: Option<&SampleChunk>,
+    options: &DiagnoseOptions,
+    threads: usize,
+) -> Result<CandidateSet, ModelError> {
     let mut candidates = library(ctx);
     let mut extended = ctx.structure.clone();
     let mut params: Vec<Vec<usize>> = candidates.iter().map(|c| c.add_to(&mut extended)).collect();
@@ -46,6 +57,7 @@ pub fn candidate_set(
             &generic::ScreeningOptions {
                 alpha: options.alpha,
                 min_drop: options.min_gain,
+                threads,
                 ..Default::default()
             },
         )?,

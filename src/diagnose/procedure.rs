@@ -84,6 +84,7 @@ use crate::estimate::{self, AxisMetrics, CrossValidation, EstimateError, Fit, Fi
 use crate::model::ModelStructure;
 use crate::sample::Axis;
 use crate::stats::{AccumulateError, Accumulator};
+use crate::util::map_on_threads;
 
 /// Thresholds of the procedure.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -516,6 +517,18 @@ pub fn diagnose(
     fit_options: &FitOptions,
     options: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
+    diagnose_on_threads(stats, fit_options, options, 1)
+}
+
+/// [`diagnose`] with the independent trial fits of each step (every candidate scored
+/// against the current model, every term left out in turn) on up to `threads` threads;
+/// the result does not depend on `threads`.
+pub fn diagnose_on_threads(
+    stats: &CandidateStatistics,
+    fit_options: &FitOptions,
+    options: &DiagnoseOptions,
+    threads: usize,
+) -> Result<Diagnosis, DiagnoseError> {
     let inflation = options.variance_inflation;
     let kept: Vec<usize> = stats.columns_of(|p| p < stats.base_params);
     let base = trial(stats, &kept, fit_options, inflation)?;
@@ -527,6 +540,7 @@ pub fn diagnose(
         current: base.clone(),
         tried: Vec::new(),
         in_model: Vec::new(),
+        threads,
     };
     let mut steps = Vec::new();
     let mut stopped_at_limit = false;
@@ -556,7 +570,14 @@ pub fn diagnose(
         in_model,
         ..
     } = search;
-    let unsupported = prune(stats, &mut kept, &mut current, fit_options, options);
+    let unsupported = prune(
+        stats,
+        &mut kept,
+        &mut current,
+        fit_options,
+        options,
+        threads,
+    );
     let validation = stats
         .report
         .map(|r| -> Result<_, DiagnoseError> {
@@ -636,6 +657,8 @@ struct Search<'a> {
     tried: Vec<usize>,
     /// Candidates in the current model: index, score when added, the finding.
     in_model: Vec<(usize, CandidateScore, String)>,
+    /// Threads the trial fits of one step share.
+    threads: usize,
 }
 
 impl Search<'_> {
@@ -695,9 +718,8 @@ impl Search<'_> {
             return None;
         }
         let generic_full = self.generic_full();
-        let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> = remaining
-            .iter()
-            .map(|&c| {
+        let mut scored: Vec<(CandidateScore, usize, Option<Trial>)> =
+            map_on_threads(&remaining, self.threads, |&c| {
                 let local = self.local_before(c, &self.current);
                 let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
                 let mut s = score(
@@ -715,8 +737,7 @@ impl Search<'_> {
                     });
                 }
                 s
-            })
-            .collect();
+            });
         // Accepted first; among them completions of the Eq. 22 structure before
         // undeclared effects (so an effect is judged against a model that already has
         // the terms its own assumptions drop), and named effects before generic terms;
@@ -933,17 +954,19 @@ impl Search<'_> {
             return None;
         }
         let in_model: Vec<usize> = self.in_model.iter().map(|(c, _, _)| *c).collect();
-        let (best, c, trial) = (0..stats.candidates.len())
+        let forms: Vec<usize> = (0..stats.candidates.len())
             .filter(|&f| {
                 stats.candidates[f].kind.family() == kind.family() && !in_model.contains(&f)
             })
-            .map(|f| {
-                let local = self.local_before(f, reduced);
-                let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
-                score(self, without, f, reduced, local, self.level(f), stay)
-            })
-            .filter(|(s, _, _)| s.rejected.is_none())
-            .max_by(|a, b| a.0.held_out_lr.total_cmp(&b.0.held_out_lr))?;
+            .collect();
+        let (best, c, trial) = map_on_threads(&forms, self.threads, |&f| {
+            let local = self.local_before(f, reduced);
+            let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
+            score(self, without, f, reduced, local, self.level(f), stay)
+        })
+        .into_iter()
+        .filter(|(s, _, _)| s.rejected.is_none())
+        .max_by(|a, b| a.0.held_out_lr.total_cmp(&b.0.held_out_lr))?;
         let trial = trial.filter(|_| best.held_out_lr > in_use.held_out_lr)?;
         let alike = if best.held_out_lr - in_use.held_out_lr <= self.lr_noise() {
             vec![describe(in_use)]
@@ -1023,6 +1046,7 @@ fn prune(
     current: &mut Trial,
     fit_options: &FitOptions,
     options: &DiagnoseOptions,
+    threads: usize,
 ) -> Vec<Unsupported> {
     let scale: Vec<[f64; 6]> = current
         .cv
@@ -1050,18 +1074,18 @@ fn prune(
         if terms.is_empty() {
             break;
         }
-        let cheapest = terms
-            .iter()
-            .filter_map(|&term| {
-                let without: Vec<usize> = kept
-                    .iter()
-                    .copied()
-                    .filter(|&j| (column(j).param, column(j).axis) != term)
-                    .collect();
-                let t = trial(stats, &without, fit_options, options.variance_inflation).ok()?;
-                Some((term, cv_score(&t.cv, &scale), t))
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let cheapest = map_on_threads(&terms, threads, |&term| {
+            let without: Vec<usize> = kept
+                .iter()
+                .copied()
+                .filter(|&j| (column(j).param, column(j).axis) != term)
+                .collect();
+            let t = trial(stats, &without, fit_options, options.variance_inflation).ok()?;
+            Some((term, cv_score(&t.cv, &scale), t))
+        })
+        .into_iter()
+        .flatten()
+        .min_by(|a, b| a.1.total_cmp(&b.1));
         let Some(((param, axis), score, t)) = cheapest else {
             break;
         };
