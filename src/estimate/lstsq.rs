@@ -34,7 +34,8 @@ pub(crate) struct LeastSquares {
 pub(crate) struct Conditioning {
     /// Singular values, largest first.
     pub singular_values: Vec<f64>,
-    /// Right singular vectors, `vectors[i]` belongs to `singular_values[i]`.
+    /// Right singular vectors, `vectors[i]` belongs to `singular_values[i]` (empty in the
+    /// conditioning of a successful [`solve`]: only a rank-deficient design needs them).
     pub vectors: Vec<Vec<f64>>,
     /// Variance-inflation factors (uncentred: diagonal of (CᵀC)⁻¹ for unit-norm columns);
     /// infinite for a rank-deficient design.
@@ -110,9 +111,12 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
     }
     let r = triangular_factor(a);
     let r11 = Mat::from_fn(k, k, |i, j| if j >= i { r[(i, j)] } else { 0.0 });
-    let conditioning = conditioning_of(&r11);
+    let conditioning = singular_values_of(&r11);
     if !conditioning.weak_directions(rank_tol).is_empty() {
-        return Err(RankDeficient { conditioning });
+        // The singular vectors name the aliased columns: worth their cost only here.
+        return Err(RankDeficient {
+            conditioning: conditioning_of(&r11),
+        });
     }
     let rhs: Vec<f64> = (0..k).map(|i| r[(i, k)]).collect();
     let theta_s = back_substitute(&r11, &rhs);
@@ -136,17 +140,29 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
 
 /// Singular values, right singular vectors and VIFs of an equilibrated triangular factor.
 pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
+    conditioning_with(r11, true)
+}
+
+/// [`conditioning_of`] without the singular vectors (`vectors` empty): the solve of a
+/// design of full rank needs its singular values and VIFs only.
+fn singular_values_of(r11: &Mat<f64>) -> Conditioning {
+    conditioning_with(r11, false)
+}
+
+fn conditioning_with(r11: &Mat<f64>, with_vectors: bool) -> Conditioning {
     let k = r11.ncols();
-    let (singular_values, vectors) = match singular_value_decomposition(r11) {
+    let (singular_values, vectors) = match singular_value_decomposition(r11, with_vectors) {
         Ok((s, v)) => {
             let mut idx: Vec<usize> = (0..k).collect();
             idx.sort_by(|&a, &b| s[b].total_cmp(&s[a]));
-            (
-                idx.iter().map(|&i| s[i].abs()).collect(),
-                idx.iter()
+            let vectors = match v {
+                Some(v) => idx
+                    .iter()
                     .map(|&i| (0..k).map(|j| v[(j, i)]).collect())
                     .collect(),
-            )
+                None => Vec::new(),
+            };
+            (idx.iter().map(|&i| s[i].abs()).collect(), vectors)
         }
         // SVD did not converge: report the design as unusable.
         Err(_) => (vec![0.0; k], vec![vec![1.0 / (k as f64).sqrt(); k]; k]),
@@ -176,20 +192,33 @@ fn triangular_factor(mut a: Mat<f64>) -> Mat<f64> {
     r
 }
 
-/// Singular values (unsorted) and right singular vectors (columns) of square `r`, on this
-/// thread.
+/// Singular values (unsorted) and, when asked for, right singular vectors (columns) of
+/// square `r`, on this thread.
 fn singular_value_decomposition(
     r: &Mat<f64>,
-) -> Result<(Vec<f64>, Mat<f64>), faer::linalg::svd::SvdError> {
+    with_vectors: bool,
+) -> Result<(Vec<f64>, Option<Mat<f64>>), faer::linalg::svd::SvdError> {
     let k = r.ncols();
-    let (mut v, mut s) = (Mat::zeros(k, k), Diag::zeros(k));
-    let (none, full) = (ComputeSvdVectors::No, ComputeSvdVectors::Full);
-    let scratch = svd_scratch::<f64>(k, k, none, full, Par::Seq, Default::default());
+    let mut s = Diag::zeros(k);
+    let mut v = with_vectors.then(|| Mat::zeros(k, k));
+    let right = if with_vectors {
+        ComputeSvdVectors::Full
+    } else {
+        ComputeSvdVectors::No
+    };
+    let scratch = svd_scratch::<f64>(
+        k,
+        k,
+        ComputeSvdVectors::No,
+        right,
+        Par::Seq,
+        Default::default(),
+    );
     svd(
         r.as_ref(),
         s.as_mut(),
         None,
-        Some(v.as_mut()),
+        v.as_mut().map(|v| v.as_mut()),
         Par::Seq,
         MemStack::new(&mut MemBuffer::new(scratch)),
         Default::default(),
