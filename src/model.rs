@@ -1354,7 +1354,7 @@ fn vortex_ring_onset(descent: f64, vh: f64, nu0: f64) -> f64 {
     if exponent > 746.0 {
         0.0
     } else {
-        (-exponent).exp()
+        crate::util::exp(-exponent)
     }
 }
 

@@ -747,7 +747,7 @@ impl LogReader {
                 // Ω̇ = (c − Ω)/τ solved exactly for a command c linear over the step (as the
                 // aligned command is): Ω = c − ċτ + (Ω_prev − c_prev + ċτ) e^(−Δt/τ).
                 let h = row.t - last.t;
-                let decay = (-h / tau).exp();
+                let decay = crate::util::exp(-h / tau);
                 let n = self.vehicle.rotors;
                 let previous = last.omega[..n].iter().zip(&last.command[..n]);
                 let now = row.omega[..n].iter_mut().zip(&row.command[..n]);
