@@ -16,6 +16,8 @@ use faer::linalg::matmul::matmul;
 use faer::prelude::*;
 use faer::{Accum, Mat, MatMut, Par};
 
+use crate::util::dot;
+
 /// Columns per panel: reflectors within a panel are applied by vector loops, to the rest
 /// of the matrix by matrix products. 8 is fastest for q = 44 and q = 147 on 1024-row
 /// chunks (4 and 16 cost 15–50 % more).
@@ -187,23 +189,6 @@ fn norm(x: &[f64]) -> f64 {
     } else {
         faer::ColRef::from_slice(x).norm_l2()
     }
-}
-
-/// xᵀy with eight partial sums (vectorisable, the same for any alignment).
-fn dot(x: &[f64], y: &[f64]) -> f64 {
-    let split = x.len() / 8 * 8;
-    let mut acc = [0.0f64; 8];
-    for (a, b) in x[..split].chunks_exact(8).zip(y[..split].chunks_exact(8)) {
-        for k in 0..8 {
-            acc[k] += a[k] * b[k];
-        }
-    }
-    let head = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
-    head + x[split..]
-        .iter()
-        .zip(&y[split..])
-        .map(|(a, b)| a * b)
-        .sum::<f64>()
 }
 
 /// y += a x.
