@@ -661,14 +661,13 @@ impl ModelStructure {
             let slot = required.binary_search(&s).expect("required signal");
             signal_slice(s, chunk, signals, slot * cap, n)
         };
-        for (j, col) in self.columns.iter().enumerate() {
-            let dst = &mut columns[j * cap..j * cap + n];
-            if !apply_pair_terms(dst, &col.terms, &lookup) {
-                for (i, t) in col.terms.iter().enumerate() {
-                    apply_term(dst, t, i == 0, 1.0, &lookup);
-                }
-            }
-        }
+        crate::util::vectorized(AssembleColumns {
+            columns: &self.columns,
+            dst: columns,
+            cap,
+            n,
+            lookup: &lookup,
+        });
         for axis in Axis::ALL {
             let a = axis as usize;
             let dst = &mut outputs[a * cap..a * cap + n];
@@ -1365,6 +1364,33 @@ fn in_plane_speed(u: f64, v: f64) -> f64 {
     (u * u + v * v).sqrt()
 }
 
+/// The regressor columns of one chunk, as one operation for [`crate::util::vectorized`].
+struct AssembleColumns<'c, 'a, L: Fn(Signal) -> &'a [f64]> {
+    columns: &'c [Column],
+    /// Column j at `j * cap`, `n` samples.
+    dst: &'c mut [f64],
+    cap: usize,
+    n: usize,
+    lookup: &'c L,
+}
+
+impl<'a, L: Fn(Signal) -> &'a [f64]> pulp::WithSimd for AssembleColumns<'_, 'a, L> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let (cap, n) = (self.cap, self.n);
+        for (j, col) in self.columns.iter().enumerate() {
+            let dst = &mut self.dst[j * cap..j * cap + n];
+            if !apply_pair_terms(dst, &col.terms, self.lookup) {
+                for (i, t) in col.terms.iter().enumerate() {
+                    apply_term(dst, t, i == 0, 1.0, self.lookup);
+                }
+            }
+        }
+    }
+}
+
 /// The values of signal `s` for the `n` samples of `chunk`; computed signals live at
 /// `offset` in `signals`.
 fn signal_slice<'a>(
@@ -1391,6 +1417,7 @@ fn signal_slice<'a>(
 /// Columns of two or three terms that are each a product of two signals (the inflow
 /// corrections, the yaw-moment drag terms) in one fused pass; false when the column has
 /// another shape.
+#[inline(always)]
 fn apply_pair_terms<'a>(
     dst: &mut [f64],
     terms: &[Term],
@@ -1418,6 +1445,7 @@ fn apply_pair_terms<'a>(
 }
 
 /// `dst (=|+=) scale · coef · Π factors`, one vectorisable loop per term.
+#[inline(always)]
 fn apply_term<'a>(
     dst: &mut [f64],
     t: &Term,
@@ -1455,24 +1483,29 @@ fn apply_term<'a>(
     }
 }
 
+#[inline(always)]
 fn zip1(dst: &mut [f64], a: &[f64], f: impl Fn(f64) -> f64) {
     dst.iter_mut().zip(a).for_each(|(d, &x)| *d = f(x));
 }
 
+#[inline(always)]
 fn zip1_add(dst: &mut [f64], a: &[f64], f: impl Fn(f64) -> f64) {
     dst.iter_mut().zip(a).for_each(|(d, &x)| *d += f(x));
 }
 
+#[inline(always)]
 fn zip1_mul(dst: &mut [f64], a: &[f64]) {
     dst.iter_mut().zip(a).for_each(|(d, &x)| *d *= x);
 }
 
+#[inline(always)]
 fn zip2(dst: &mut [f64], a: &[f64], b: &[f64], f: impl Fn(f64, f64) -> f64) {
     dst.iter_mut()
         .zip(a.iter().zip(b))
         .for_each(|(d, (&x, &y))| *d = f(x, y));
 }
 
+#[inline(always)]
 fn zip2_add(dst: &mut [f64], a: &[f64], b: &[f64], f: impl Fn(f64, f64) -> f64) {
     dst.iter_mut()
         .zip(a.iter().zip(b))

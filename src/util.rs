@@ -17,7 +17,7 @@ pub fn range_of(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
 /// Dot product Σ aᵢbᵢ over the common length of `a` and `b`, in eight partial sums
 /// (vectorisable: a single running sum waits on each addition's latency) added in a fixed
 /// order, so the value depends on the inputs alone. Below eight terms, a plain running sum.
-#[inline]
+#[inline(always)]
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let split = n / 8 * 8;
@@ -131,6 +131,19 @@ pub(crate) fn map_on_threads<T: Sync, R: Send>(
         .into_iter()
         .filter_map(|s| s.into_inner().unwrap_or_else(|e| e.into_inner()))
         .collect()
+}
+
+/// `op`, compiled for AVX2 and FMA where the CPU has them (pulp's runtime dispatch, as
+/// faer's own kernels use): the vector loops `op.with_simd` inlines (mark them
+/// `#[inline(always)]`) run four lanes wide instead of two. The values are the same bit
+/// for bit: Rust never fuses a product and a sum into an FMA, and no loop's order of
+/// operations depends on the lane count.
+pub(crate) fn vectorized<Op: pulp::WithSimd>(op: Op) -> Op::Output {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = pulp::x86::V3::try_new() {
+        return pulp::Simd::vectorize(simd, op);
+    }
+    op.with_simd(pulp::Scalar)
 }
 
 /// e^x, libm's value bit for bit, with the upper halves of the vector registers cleared

@@ -57,6 +57,36 @@ pub(crate) fn fold_rows(mut r: MatMut<'_, f64>, mut b: MatMut<'_, f64>, s: &mut 
     let q = r.ncols();
     assert!(r.nrows() == q && b.ncols() == q, "[R; B] shapes");
     if b.nrows() > 0 {
+        crate::util::vectorized(FoldPanels {
+            r: r.rb_mut(),
+            b: b.rb_mut(),
+            s,
+        });
+    }
+    for i in 0..q {
+        if r[(i, i)] < 0.0 {
+            for j in i..q {
+                r[(i, j)] = -r[(i, j)];
+            }
+        }
+    }
+}
+
+/// The reflectors of [R; B], panel by panel, as one operation for
+/// [`crate::util::vectorized`].
+struct FoldPanels<'a> {
+    r: MatMut<'a, f64>,
+    b: MatMut<'a, f64>,
+    s: &'a mut FoldScratch,
+}
+
+impl pulp::WithSimd for FoldPanels<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let Self { mut r, mut b, s } = self;
+        let q = r.ncols();
         let mut c = 0;
         while c < q {
             let w = PANEL.min(q - c);
@@ -65,13 +95,6 @@ pub(crate) fn fold_rows(mut r: MatMut<'_, f64>, mut b: MatMut<'_, f64>, s: &mut 
                 update_right_of_panel(r.rb_mut(), b.rb_mut(), c, w, s);
             }
             c += w;
-        }
-    }
-    for i in 0..q {
-        if r[(i, i)] < 0.0 {
-            for j in i..q {
-                r[(i, j)] = -r[(i, j)];
-            }
         }
     }
 }
@@ -85,6 +108,7 @@ fn column(b: MatMut<'_, f64>, j: usize) -> &mut [f64] {
 }
 
 /// Reflectors of columns c..c + w, applied within those columns; their τ in `tau`.
+#[inline(always)]
 fn factor_panel(
     mut r: MatMut<'_, f64>,
     mut b: MatMut<'_, f64>,
@@ -182,6 +206,7 @@ fn update_right_of_panel(
 }
 
 /// ‖x‖₂: the plain sum of squares, or faer's scaled norm where that over- or underflows.
+#[inline(always)]
 fn norm(x: &[f64]) -> f64 {
     let ss = dot(x, x);
     if ss.is_finite() && ss > f64::MIN_POSITIVE / f64::EPSILON {
@@ -192,6 +217,7 @@ fn norm(x: &[f64]) -> f64 {
 }
 
 /// y += a x.
+#[inline(always)]
 fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     y.iter_mut().zip(x).for_each(|(yi, xi)| *yi += a * xi);
 }
