@@ -148,10 +148,10 @@ pub(crate) fn vectorized<Op: pulp::WithSimd>(op: Op) -> Op::Output {
 
 /// e^x, libm's value bit for bit, with the upper halves of the vector registers cleared
 /// first where the CPU has AVX (`vzeroupper`). glibc's `exp` opens with legacy-SSE
-/// instructions; called while the upper register state is dirty (glibc's own AVX-512
-/// `memmove` writes zmm16–31, and nothing clears them) each call stalls on an SSE/AVX state
+/// instructions; called while the upper register state is dirty (most likely from glibc's
+/// AVX-512 `memmove`, which writes zmm16–31) each call stalls on an SSE/AVX state
 /// transition: measured ~130 ns a call instead of ~6 ns on this project's 2-core Xeon VMs,
-/// 10 % of a diagnosed fit (BENCHMARKS.md, "libm's exp after vzeroupper").
+/// 10 % of a diagnosed fit (BENCHMARKS.md, "libm's `exp` unstalled").
 pub(crate) fn exp(x: f64) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") {
