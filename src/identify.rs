@@ -181,7 +181,8 @@ impl Identification {
         self
     }
 
-    /// Threads for reading and accumulating (at least 1). Results do not depend on it.
+    /// Threads for reading and accumulating, and for the diagnosis's screening and trial
+    /// fits (at least 1). Results do not depend on it.
     pub fn threads(mut self, threads: usize) -> Self {
         self.request.threads = threads.max(1);
         self

@@ -104,7 +104,8 @@ struct FitArgs {
     /// Write plots (SVG and PNG) into this directory.
     #[arg(long)]
     plots: Option<PathBuf>,
-    /// Reader threads (default: available cores).
+    /// Threads for reading, accumulating and the diagnosis's trial fits (default: available
+    /// cores; the report does not depend on it).
     #[arg(long)]
     threads: Option<usize>,
     /// Print nothing but errors.
