@@ -81,7 +81,7 @@ pub struct FitRequest {
     pub holdout: Holdout,
     /// Reporting-only validation logs: evaluated, never used for a decision.
     pub validate: Vec<LogSource>,
-    /// Reader threads (≥ 1).
+    /// Threads for reading, accumulating and the diagnosis (≥ 1).
     pub threads: usize,
     /// Run the second pass (residual diagnostics, plot series).
     pub second_pass: bool,
