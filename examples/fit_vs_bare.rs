@@ -194,8 +194,11 @@ fn shifted_copies(src: &Path, out: &Path, copies: u64, first: u64) {
             }
         }
     }
-    w.flush().expect("write");
-    drop(w);
+    // On disk before any timing: otherwise the kernel writes the new gigabytes back
+    // during the timed runs, on the same two cores.
+    let file = w.into_inner().expect("write log");
+    file.sync_all().expect("sync log");
+    drop(file);
     std::fs::rename(&tmp, out).expect("rename log");
 }
 
