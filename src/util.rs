@@ -175,6 +175,32 @@ mod tests {
     use super::*;
 
     #[test]
+    fn dot_is_the_running_sum_below_eight_terms_and_exact_on_integers() {
+        let a: Vec<f64> = (0..37).map(|i| (i as f64 * 0.37).sin()).collect();
+        let b: Vec<f64> = (0..37).map(|i| (i as f64 * 1.3).cos()).collect();
+        for n in 0..a.len() {
+            let running: f64 = a[..n].iter().zip(&b[..n]).map(|(x, y)| x * y).sum();
+            if n < 8 {
+                // The same additions in the same order (mixing and simulator values).
+                assert_eq!(
+                    dot(&a[..n], &b[..n]).to_bits(),
+                    running.to_bits(),
+                    "n = {n}"
+                );
+            } else {
+                // Another summation order: rounding-level difference only.
+                assert!((dot(&a[..n], &b[..n]) - running).abs() <= 1e-14, "n = {n}");
+            }
+            // Small integers: every product and partial sum is exact in f64.
+            let ints: Vec<f64> = (0..n).map(|i| (i % 7) as f64 - 3.0).collect();
+            let exact: i64 = (0..n as i64).map(|i| (i % 7 - 3) * (i % 7 - 3)).sum();
+            assert_eq!(dot(&ints, &ints), exact as f64, "n = {n}");
+        }
+        // The common length of unequal slices.
+        assert_eq!(dot(&[1.0; 20], &[2.0; 11]), 22.0);
+    }
+
+    #[test]
     fn exp_returns_libms_value_bit_for_bit() {
         // Normal, subnormal, zero and overflowing results and the special values: the
         // register clearing must not change a bit of any of them.

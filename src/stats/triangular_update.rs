@@ -297,6 +297,52 @@ mod tests {
         }
     }
 
+    /// The AVX2 code of [`crate::util::vectorized`] and the baseline code give the same
+    /// bits: no fused multiply-adds, the same order of operations (the reports' identity
+    /// across machines with and without AVX2 rests on it).
+    #[test]
+    fn vector_and_baseline_code_fold_to_the_same_bits() {
+        let (q, n) = (45, 300);
+        let mut rnd = values(7);
+        let r0 = Mat::from_fn(q, q, |i, j| match j.cmp(&i) {
+            std::cmp::Ordering::Less => 0.0,
+            std::cmp::Ordering::Equal => 2.0 + rnd(),
+            std::cmp::Ordering::Greater => rnd(),
+        });
+        let b = Mat::from_fn(n, q, |_, _| rnd());
+        let fold = |baseline: bool| {
+            let (mut r, mut work, mut s) = (r0.clone(), b.clone(), FoldScratch::new());
+            let op = FoldPanels {
+                r: r.as_mut(),
+                b: work.as_mut(),
+                s: &mut s,
+            };
+            if baseline {
+                pulp::WithSimd::with_simd(op, pulp::Scalar);
+            } else {
+                crate::util::vectorized(op);
+            }
+            (r, work)
+        };
+        let (vector, baseline) = (fold(false), fold(true));
+        for j in 0..q {
+            for i in 0..q {
+                assert_eq!(
+                    vector.0[(i, j)].to_bits(),
+                    baseline.0[(i, j)].to_bits(),
+                    "R[{i},{j}]"
+                );
+            }
+            for i in 0..n {
+                assert_eq!(
+                    vector.1[(i, j)].to_bits(),
+                    baseline.1[(i, j)].to_bits(),
+                    "V[{i},{j}]"
+                );
+            }
+        }
+    }
+
     /// A zero R gives the QR of B alone; a zero column (rank deficiency) and columns of
     /// 1e200 (squares overflow) and 1e-200 (squares underflow) give the exact norms.
     #[test]
