@@ -249,15 +249,13 @@ fn read_log(
 const CHUNKS_IN_FLIGHT: usize = 4;
 
 /// CSV parsing threads of a job that may use `share` threads: none on one thread (all
-/// work inline); else `share` − 2 beside the consumer and the reader thread, but at least
-/// one, so that two threads give the parsing, the reader's checks and derivations, and
-/// the accumulation three threads (they take turns on the two).
+/// work inline); else `share`, beside the reader thread and the consumer. Parsing is the
+/// first pass's critical path: with a worker per thread, the scheduler gives it the time
+/// the reader's checks and derivations and the accumulation leave idle (one worker beside
+/// them on two threads bounded a 1 M-row `fit --no-diagnose` at 1.42–1.53 s, two took
+/// 1.32–1.33 s; BENCHMARKS.md).
 fn parse_threads(share: usize) -> usize {
-    if share < 2 {
-        0
-    } else {
-        share.saturating_sub(2).max(1)
-    }
+    if share < 2 { 0 } else { share }
 }
 
 /// Feeds the log `source` to `consume` in chunks of [`CHUNK_SAMPLES`] (the last one
