@@ -113,9 +113,13 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
     let r11 = Mat::from_fn(k, k, |i, j| if j >= i { r[(i, j)] } else { 0.0 });
     let conditioning = singular_values_of(&r11);
     if !conditioning.weak_directions(rank_tol).is_empty() {
-        // The singular vectors name the aliased columns: worth their cost only here.
+        // The singular vectors name the aliased columns: worth their cost only here. The
+        // values stay those the rank was decided on, so the weak directions are the ones
+        // found (a second SVD may round σ_min to the other side of the tolerance).
+        let mut deficient = conditioning_of(&r11);
+        deficient.singular_values = conditioning.singular_values;
         return Err(RankDeficient {
-            conditioning: conditioning_of(&r11),
+            conditioning: deficient,
         });
     }
     let rhs: Vec<f64> = (0..k).map(|i| r[(i, k)]).collect();
