@@ -13,6 +13,7 @@
 
 pub mod cdr;
 pub mod contract_csv;
+pub mod decimal;
 pub mod derive;
 pub mod error;
 pub mod layout;
