@@ -186,8 +186,12 @@ impl SampleChunk {
     /// Appends samples `range` of `src` (same rotor count and optional signals).
     pub fn extend_from(&mut self, src: &SampleChunk, range: std::ops::Range<usize>) {
         fn ext(dst: &mut Vec<f64>, src: &[f64], r: &std::ops::Range<usize>) {
-            if let Some(s) = src.get(r.clone()) {
-                dst.extend_from_slice(s);
+            match src.get(r.clone()) {
+                // A sweep's samples come one or two at a time: a call of `memmove` per
+                // signal and sample cost more than the copy.
+                Some(s) if s.len() <= 4 => s.iter().for_each(|&x| dst.push(x)),
+                Some(s) => dst.extend_from_slice(s),
+                None => {}
             }
         }
         ext(&mut self.t, &src.t, &range);
