@@ -187,9 +187,10 @@ impl Range {
             self.faults.push((row, Fault::Width(width)));
             return;
         }
-        // One UTF-8 check of the whole row instead of one per field; a row that fails
-        // it is checked field by field so the error names the offending field.
-        let utf8 = std::str::from_utf8(text).ok();
+        // A field the fast path reads is ASCII. For the others, one UTF-8 check of the
+        // whole row (when the first comes) instead of one per field; a row that fails it
+        // is checked field by field so the error names the offending field.
+        let mut utf8 = None;
         let values = &mut self.values[start..];
         for (slot, (&col, v)) in columns.of_slot.iter().zip(values).enumerate() {
             let range = field(col);
@@ -197,7 +198,8 @@ impl Range {
                 *v = x;
                 continue;
             }
-            let parsed = match utf8.and_then(|t| t.get(range.clone())) {
+            let checked = *utf8.get_or_insert_with(|| std::str::from_utf8(text).ok());
+            let parsed = match checked.and_then(|t| t.get(range.clone())) {
                 Some(f) => parse_text(f),
                 None => parse_field(&text[range]),
             };

@@ -27,7 +27,8 @@ pub fn parse_f64(text: &str) -> Result<f64, std::num::ParseFloatError> {
 /// [`parse_f64`]'s fast path for the field `row[field]`, which it reads eight bytes at
 /// a time (bytes of `row` past the field are read but never used): `None` where std
 /// must decide. A field of up to 7 digits before and after an optional point takes no
-/// branch per digit.
+/// branch per digit; one with 8 or more on either side is left to std at once, and one
+/// with an exponent to [`exact_fast_path`].
 pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
     let end = field.end.min(row.len());
     let mut i = field.start.min(end);
@@ -38,7 +39,9 @@ pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
     let word = load8(row, i);
     let int_digits = leading_digits(word).min(end - i);
     if int_digits == 8 {
-        return exact_fast_path(&row[field.start..end]);
+        // Eight digits or more: rarely exact here (a full-precision value needs std's
+        // Eisel–Lemire path), so no second look.
+        return None;
     }
     let mut w = digits_value(word, int_digits);
     i += int_digits;
@@ -48,7 +51,7 @@ pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
         let word = load8(row, i);
         fraction = leading_digits(word).min(end - i);
         if fraction == 8 {
-            return exact_fast_path(&row[field.start..end]);
+            return None;
         }
         w = w * POW10_U64[fraction] + digits_value(word, fraction);
         i += fraction;
