@@ -31,7 +31,8 @@ pub fn parse_f64(text: &str) -> Result<f64, std::num::ParseFloatError> {
 /// with an exponent to [`exact_fast_path`].
 pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
     let end = field.end.min(row.len());
-    let mut i = field.start.min(end);
+    let start = field.start.min(end);
+    let mut i = start;
     let negative = i < end && row[i] == b'-';
     if i < end && (negative || row[i] == b'+') {
         i += 1;
@@ -58,7 +59,7 @@ pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
     }
     if i != end {
         // An exponent, or not a number.
-        return exact_fast_path(&row[field.start..end]);
+        return exact_fast_path(&row[start..end]);
     }
     if int_digits + fraction == 0 {
         return None;
@@ -373,6 +374,12 @@ mod tests {
         ] {
             assert!(exact_fast_path(text.as_bytes()).is_none(), "{text}");
         }
+        // A field range past the row reads nothing (and does not panic).
+        assert_eq!(
+            fast_path_in(b"12", std::ops::Range { start: 5, end: 3 }),
+            None
+        );
+        assert_eq!(fast_path_in(b"12,5", 3..9), Some(5.0));
     }
 
     /// Random decimal texts in and around the fast path: every part optional, lengths
