@@ -18,7 +18,7 @@ const POW10: [f64; 23] = [
 /// Parses `text` (no surrounding spaces) as std's `str::parse::<f64>` does, with the
 /// same result bit for bit and the same acceptance.
 pub fn parse_f64(text: &str) -> Result<f64, std::num::ParseFloatError> {
-    match exact_fast_path(text.as_bytes()) {
+    match fast_path_in(text.as_bytes(), 0..text.len()) {
         Some(v) => Ok(v),
         None => text.parse::<f64>(),
     }
