@@ -103,23 +103,27 @@ fn record_start(bytes: &[u8], record: &csv::ByteRecord) -> u64 {
 impl Range {
     /// Tokenises and parses `bytes` into rows (blank lines skipped, as the csv
     /// tokeniser does); each row's first failure in slot order is kept as its fault.
-    /// Text without quotes or carriage returns (every contract log we write) is split on
-    /// its commas and line feeds directly, which is what the csv tokeniser would do with
-    /// it; any other text goes through the tokeniser.
+    /// Text without quotes whose lines end in LF or CRLF (every contract log we write,
+    /// and Windows exports) is split on its commas and line ends directly, which is what
+    /// the csv tokeniser would do with it; any other text (quoted fields, a lone CR)
+    /// goes through the tokeniser.
     fn parse(&mut self, columns: &Columns) {
         self.values.clear();
         self.lines.clear();
         self.faults.clear();
-        self.newlines = memchr::memchr_iter(b'\n', &self.bytes).count() as u64;
-        if memchr::memchr2(b'"', b'\r', &self.bytes).is_none() {
-            self.parse_plain(columns);
-        } else {
+        let bytes = &self.bytes;
+        self.newlines = memchr::memchr_iter(b'\n', bytes).count() as u64;
+        let quoted = memchr::memchr(b'"', bytes).is_some();
+        let lone_cr = memchr::memchr_iter(b'\r', bytes).any(|i| bytes.get(i + 1) != Some(&b'\n'));
+        if quoted || lone_cr {
             self.parse_tokenised(columns);
+        } else {
+            self.parse_plain(columns);
         }
     }
 
-    /// [`Range::parse`] of text without quotes or carriage returns: records are its
-    /// non-empty lines, fields the text between commas.
+    /// [`Range::parse`] of text without quotes in which every CR starts a CRLF: records
+    /// are its non-empty lines (without their CR), fields the text between commas.
     fn parse_plain(&mut self, columns: &Columns) {
         let bytes = std::mem::take(&mut self.bytes);
         let mut ends = Vec::with_capacity(columns.header_len + 1);
@@ -127,7 +131,8 @@ impl Range {
         let mut line = 0;
         while start < bytes.len() {
             let end = memchr::memchr(b'\n', &bytes[start..]).map_or(bytes.len(), |i| start + i);
-            let record = &bytes[start..end];
+            let line_text = &bytes[start..end];
+            let record = line_text.strip_suffix(b"\r").unwrap_or(line_text);
             if !record.is_empty() {
                 field_ends(record, &mut ends);
                 let field = |c: usize| (if c == 0 { 0 } else { ends[c - 1] + 1 })..ends[c];
@@ -139,7 +144,7 @@ impl Range {
         self.bytes = bytes;
     }
 
-    /// [`Range::parse`] through the csv tokeniser (quoted fields, CR line ends).
+    /// [`Range::parse`] through the csv tokeniser (quoted fields, lone CR line ends).
     fn parse_tokenised(&mut self, columns: &Columns) {
         let bytes = std::mem::take(&mut self.bytes);
         let mut reader = tokeniser(&bytes);
@@ -734,9 +739,9 @@ mod tests {
     }
 
     /// The direct split gives the rows, values (bit for bit), line numbers and faults of
-    /// the csv tokeniser on random quote- and CR-free text: numbers, junk, empty fields,
-    /// blank lines, rows too short or too long, invalid UTF-8, a last line with or
-    /// without its line feed.
+    /// the csv tokeniser on random quote-free text with LF and CRLF line ends: numbers,
+    /// junk, empty fields, blank lines, rows too short or too long, invalid UTF-8, a last
+    /// line with or without its line end.
     #[test]
     fn plain_split_equals_the_tokeniser() {
         let mut rng = StdRng::seed_from_u64(5);
@@ -758,11 +763,18 @@ mod tests {
             b"123456789012345678901",
             b"-",
         ];
-        for _ in 0..2000 {
+        for case in 0..2000 {
+            // Half the texts end some lines in CRLF (Windows exports), mixed with LF.
+            let crlf = case % 2 == 1;
             let mut text = Vec::new();
             for _ in 0..rng.random_range(0..30) {
+                let line_end: &[u8] = if crlf && rng.random_bool(0.7) {
+                    b"\r\n"
+                } else {
+                    b"\n"
+                };
                 if rng.random_bool(0.1) {
-                    text.push(b'\n');
+                    text.extend_from_slice(line_end);
                     continue;
                 }
                 let width = if rng.random_bool(0.8) {
@@ -781,10 +793,13 @@ mod tests {
                     };
                     text.extend_from_slice(&piece);
                 }
-                text.push(b'\n');
+                text.extend_from_slice(line_end);
             }
             if rng.random_bool(0.5) && text.last() == Some(&b'\n') {
                 text.pop();
+                if text.last() == Some(&b'\r') {
+                    text.pop();
+                }
             }
             let [plain, tokenised] = both_ways(&text, &columns);
             let what = String::from_utf8_lossy(&text);
@@ -806,6 +821,39 @@ mod tests {
                 "{what}"
             );
         }
+    }
+
+    /// Text the direct split cannot read (a lone CR ends a record; a quoted field may
+    /// hold a comma or a line end) goes to the tokeniser.
+    #[test]
+    fn lone_cr_and_quotes_go_to_the_tokeniser() {
+        let columns = Columns {
+            of_slot: vec![0, 1],
+            header_len: 2,
+        };
+        for text in [
+            &b"1,2\r3,4\n"[..],
+            b"1,2\r\n3,4\r",
+            b"\"1\",2\n3,4\n",
+            b"\"1,5\",2\n",
+        ] {
+            let mut parsed = Range {
+                bytes: text.to_vec(),
+                ..Range::default()
+            };
+            parsed.parse(&columns);
+            let [_, tokenised] = both_ways(text, &columns);
+            assert_eq!(parsed.lines, tokenised.lines, "{text:?}");
+            assert_eq!(parsed.values, tokenised.values, "{text:?}");
+            assert_eq!(
+                format!("{:?}", parsed.faults),
+                format!("{:?}", tokenised.faults),
+                "{text:?}"
+            );
+        }
+        // Two records where a lone CR ends the first.
+        let [_, tokenised] = both_ways(b"1,2\r3,4\n", &columns);
+        assert_eq!(tokenised.values, [1.0, 2.0, 3.0, 4.0]);
     }
 
     /// Commas are found in every byte position of a word and nowhere else.
