@@ -645,20 +645,26 @@ fn is_gzip(file: &mut File) -> std::io::Result<bool> {
     Ok(n == 2 && magic == [0x1f, 0x8b])
 }
 
-/// Parses one CSV field as f64 (surrounding spaces allowed); the error carries the text.
+/// Parses one CSV field as f64 (surrounding spaces allowed), a field whose untrimmed text
+/// the fast path ([`fast_path_in`]) has already left to std; the error carries the text.
 fn parse_field(bytes: &[u8]) -> Result<f64, String> {
     let text =
         std::str::from_utf8(bytes).map_err(|_| String::from_utf8_lossy(bytes).into_owned())?;
     parse_text(text)
 }
 
-/// [`parse_field`] of a field already known to be UTF-8.
+/// [`parse_field`] of a field already known to be UTF-8. Only a padded field gets the
+/// fast path again (on its trimmed text); any other goes to std at once.
 fn parse_text(text: &str) -> Result<f64, String> {
     let bytes = text.as_bytes();
     let padded = bytes.first().is_some_and(u8::is_ascii_whitespace)
         || bytes.last().is_some_and(u8::is_ascii_whitespace);
-    let number = if padded { text.trim() } else { text };
-    parse_f64(number).map_err(|_| text.to_string())
+    let parsed = if padded {
+        parse_f64(text.trim())
+    } else {
+        text.parse::<f64>()
+    };
+    parsed.map_err(|_| text.to_string())
 }
 
 /// Writes samples as a contract CSV (`docs/data-contract.md`; header
