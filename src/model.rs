@@ -633,6 +633,28 @@ impl ModelStructure {
     /// into `ws` (column-major, reused across chunks; allocates only when a chunk is
     /// longer than any before).
     pub fn assemble(&self, chunk: &SampleChunk, ws: &mut Workspace) -> Result<(), ModelError> {
+        self.assemble_columns(chunk, ws, None)
+    }
+
+    /// [`Self::assemble`] of the columns j with `wanted[j]` only (and all outputs); the
+    /// other columns of `ws` are left unspecified. For an accumulator, which reads one
+    /// column of each shape (`wanted` shorter than the columns assembles them all).
+    pub(crate) fn assemble_wanted(
+        &self,
+        chunk: &SampleChunk,
+        ws: &mut Workspace,
+        wanted: &[bool],
+    ) -> Result<(), ModelError> {
+        let wanted = (wanted.len() == self.columns.len()).then_some(wanted);
+        self.assemble_columns(chunk, ws, wanted)
+    }
+
+    fn assemble_columns(
+        &self,
+        chunk: &SampleChunk,
+        ws: &mut Workspace,
+        wanted: Option<&[bool]>,
+    ) -> Result<(), ModelError> {
         self.check_chunk(chunk)?;
         let n = chunk.len();
         ws.prepare(n, self.columns.len(), self.required.len());
@@ -663,6 +685,7 @@ impl ModelStructure {
         };
         crate::util::vectorized(AssembleColumns {
             columns: &self.columns,
+            wanted,
             dst: columns,
             cap,
             n,
@@ -1367,6 +1390,8 @@ fn in_plane_speed(u: f64, v: f64) -> f64 {
 /// The regressor columns of one chunk, as one operation for [`crate::util::vectorized`].
 struct AssembleColumns<'c, 'a, L: Fn(Signal) -> &'a [f64]> {
     columns: &'c [Column],
+    /// The columns to assemble (all when `None`).
+    wanted: Option<&'c [bool]>,
     /// Column j at `j * cap`, `n` samples.
     dst: &'c mut [f64],
     cap: usize,
@@ -1381,6 +1406,9 @@ impl<'a, L: Fn(Signal) -> &'a [f64]> pulp::WithSimd for AssembleColumns<'_, 'a, 
     fn with_simd<S: pulp::Simd>(self, _: S) {
         let (cap, n) = (self.cap, self.n);
         for (j, col) in self.columns.iter().enumerate() {
+            if self.wanted.is_some_and(|w| !w[j]) {
+                continue;
+            }
             let dst = &mut self.dst[j * cap..j * cap + n];
             if !apply_pair_terms(dst, &col.terms, self.lookup) {
                 for (i, t) in col.terms.iter().enumerate() {
@@ -1461,8 +1489,12 @@ fn apply_term<'a>(
         ([a], false) => zip1_add(dst, lookup(*a), |x| c * x),
         ([a, b], true) => zip2(dst, lookup(*a), lookup(*b), |x, y| c * x * y),
         ([a, b], false) => zip2_add(dst, lookup(*a), lookup(*b), |x, y| c * x * y),
+        // Three factors (candidate effects, e.g. a rotor's thrust term times its wake
+        // factor): one pass, the same products as the pairwise fold below.
+        ([a, b, f], true) => zip3(dst, [lookup(*a), lookup(*b), lookup(*f)], false, c),
+        ([a, b, f], false) => zip3(dst, [lookup(*a), lookup(*b), lookup(*f)], true, c),
         ([a, b, rest @ ..], _) => {
-            // Three or more factors: fold pairwise (rare; candidate effects only).
+            // Four or more factors: fold pairwise (rare).
             if first {
                 zip2(dst, lookup(*a), lookup(*b), |x, y| c * x * y);
                 for f in rest {
@@ -1510,6 +1542,21 @@ fn zip2_add(dst: &mut [f64], a: &[f64], b: &[f64], f: impl Fn(f64, f64) -> f64) 
     dst.iter_mut()
         .zip(a.iter().zip(b))
         .for_each(|(d, (&x, &y))| *d += f(x, y));
+}
+
+/// `dst (=|+=) ((c·x)·y)·z` over the three factor slices.
+#[inline(always)]
+fn zip3(dst: &mut [f64], [a, b, f]: [&[f64]; 3], add: bool, c: f64) {
+    let factors = a.iter().zip(b).zip(f);
+    if add {
+        for (d, ((&x, &y), &z)) in dst.iter_mut().zip(factors) {
+            *d += c * x * y * z;
+        }
+    } else {
+        for (d, ((&x, &y), &z)) in dst.iter_mut().zip(factors) {
+            *d = c * x * y * z;
+        }
+    }
 }
 
 /// Reusable column-major buffers for [`ModelStructure::assemble`].
@@ -1725,5 +1772,59 @@ mod tests {
             s.assemble(&no_height, &mut ws),
             Err(ModelError::MissingHeight)
         );
+    }
+
+    /// Three-factor terms are summed in one pass with the products of the pairwise fold
+    /// ((c·x)·y)·z, bit for bit; an assembly of the wanted columns gives the same bits in
+    /// those columns and the same outputs.
+    #[test]
+    fn three_factor_terms_and_wanted_columns_assemble_exactly() {
+        use Signal::*;
+        let v = quad();
+        let mut s = ModelStructure::eq22(&v, ModelOptions::default());
+        let param = s.add_parameter(
+            Parameter {
+                name: "x".into(),
+                unit: "-".into(),
+            },
+            vec![Column {
+                axis: Axis::Fz,
+                param: 0,
+                label: "u*v*w + 3 p*q*W1".into(),
+                terms: vec![term(0.7, &[U, V, W]), term(3.0, &[P, Q, RotorSpeed(0)])],
+            }],
+        );
+        let p = (0..s.columns.len())
+            .find(|&j| s.columns[j].param == param)
+            .expect("the added column");
+        let mut chunk = SampleChunk::with_capacity(4, 64, true);
+        for k in 0..64 {
+            let f = k as f64;
+            chunk.push(&Sample {
+                velocity: [0.3 * f - 7.1, 1.0 / (f + 3.0), (0.1 * f).sin()],
+                rates: [0.01 * f, (0.2 * f).cos(), -0.5],
+                omega: vec![400.0 + 3.7 * f; 4],
+                omega_dot: vec![1.0; 4],
+                ..Sample::default()
+            });
+        }
+        let mut ws = Workspace::default();
+        s.assemble(&chunk, &mut ws).unwrap();
+        for k in 0..64 {
+            let u: [f64; 3] = std::array::from_fn(|a| chunk.velocity[a][k]);
+            let r: [f64; 3] = std::array::from_fn(|a| chunk.rates[a][k]);
+            let first = 0.7 * u[0] * u[1] * u[2];
+            let expected = first + 3.0 * r[0] * r[1] * chunk.omega[0][k];
+            assert_eq!(ws.column(p)[k].to_bits(), expected.to_bits(), "sample {k}");
+        }
+        let wanted: Vec<bool> = (0..s.columns.len()).map(|j| j % 3 != 1).collect();
+        let mut part = Workspace::default();
+        s.assemble_wanted(&chunk, &mut part, &wanted).unwrap();
+        for (j, _) in wanted.iter().enumerate().filter(|(_, w)| **w) {
+            assert_eq!(part.column(j), ws.column(j), "column {j}");
+        }
+        for axis in Axis::ALL {
+            assert_eq!(part.output(axis), ws.output(axis));
+        }
     }
 }

@@ -86,6 +86,9 @@ pub struct Accumulator {
     shape: Vec<(usize, f64)>,
     /// For each shape, the augmented column whose data it stores.
     representative: Vec<usize>,
+    /// For each structure column, whether it is a shape's representative (the only
+    /// columns [`Accumulator::push`] assembles).
+    stored: Vec<bool>,
     /// Upper-triangular R over the shapes, q × q (q = distinct shapes), column-major.
     r: Vec<f64>,
     count: u64,
@@ -105,6 +108,16 @@ pub struct Accumulator {
 /// Distinct regressor rows counted exactly; beyond this many the count saturates (more
 /// than any model structure has parameters).
 pub const DISTINCT_ROWS_CAP: usize = 1024;
+
+/// Which of `p` structure columns are among the `representative` augmented columns.
+fn stored_columns(p: usize, representative: &[usize]) -> Vec<bool> {
+    let mut stored = vec![false; p];
+    representative
+        .iter()
+        .filter(|&&j| j < p)
+        .for_each(|&j| stored[j] = true);
+    stored
+}
 
 /// Inserts `h` into the sorted set `set` unless it is there or the set is full.
 fn insert_distinct(set: &mut Vec<u64>, h: u64) {
@@ -148,6 +161,7 @@ impl Accumulator {
         Self {
             p,
             shape,
+            stored: stored_columns(p, &representative),
             representative,
             r: vec![0.0; q * q],
             count: 0,
@@ -163,13 +177,15 @@ impl Accumulator {
     }
 
     /// Assembles `chunk` with `structure` (using `ws` as scratch) and folds it in.
+    /// Afterwards `ws` holds the outputs and the columns this accumulator stores (one
+    /// per shape); a column that is a multiple of an earlier one is not assembled.
     pub fn push(
         &mut self,
         structure: &ModelStructure,
         chunk: &SampleChunk,
         ws: &mut Workspace,
     ) -> Result<(), AccumulateError> {
-        structure.assemble(chunk, ws)?;
+        structure.assemble_wanted(chunk, ws, &self.stored)?;
         self.push_assembled(ws)
     }
 
@@ -528,6 +544,7 @@ impl Accumulator {
         Accumulator {
             p: columns.len(),
             shape,
+            stored: stored_columns(columns.len(), &representative),
             representative,
             r,
             count: self.count,

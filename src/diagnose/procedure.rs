@@ -396,8 +396,8 @@ impl CandidateStatistics<'_> {
     }
 }
 
-/// Fit of a sub-model of `stats.extended`: the estimates, σ and P with the coloured-
-/// residual correction, its cross-validation, and the structure.
+/// Fit of a sub-model of `stats.extended`: the estimates (FSOA tables left empty), σ and
+/// P with the coloured-residual correction, its cross-validation, and the structure.
 #[derive(Clone)]
 struct Trial {
     fit: Fit,
@@ -419,7 +419,7 @@ fn trial(
 ) -> Result<Trial, EstimateError> {
     let structure = stats.extended.select_columns(columns);
     let columns = columns.to_vec();
-    let fit = estimate::fit(&structure, &stats.fit.select(&columns), options)?;
+    let fit = estimate::fit_without_fsoa(&structure, &stats.fit.select(&columns), options)?;
     let cv = estimate::cross_validate(&structure, &stats.folds.select(&columns), options)?;
     let mut std = vec![0.0; structure.params.len()];
     let mut p = vec![1.0; structure.params.len()];
@@ -589,6 +589,9 @@ pub fn diagnose_on_threads(
         .transpose()?;
     let fold_metrics =
         |cv: &CrossValidation| (0..cv.folds.len()).map(|j| cv.fold_metrics(j)).collect();
+    let mut fit = current.fit;
+    let fitted = stats.fit.select(&current.columns);
+    estimate::add_fsoa_tables(&mut fit, &current.structure, &fitted, fit_options)?;
     Ok(Diagnosis {
         steps,
         findings: in_model.iter().map(|(_, _, said)| said.clone()).collect(),
@@ -601,10 +604,10 @@ pub fn diagnose_on_threads(
         before_folds: fold_metrics(&base.cv),
         after_folds: fold_metrics(&current.cv),
         validation,
-        theta: current.fit.mmr.theta.clone(),
+        theta: fit.mmr.theta.clone(),
         std: current.std,
         structure: current.structure,
-        fit: current.fit,
+        fit,
     })
 }
 

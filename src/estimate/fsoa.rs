@@ -67,6 +67,19 @@ pub struct FsoaTable {
 }
 
 impl FsoaTable {
+    /// The table of no steps, before Algorithm 1 has run.
+    pub(crate) fn empty(axis: Axis, f_in: f64) -> Self {
+        Self {
+            axis,
+            terms: Vec::new(),
+            columns: Vec::new(),
+            steps: Vec::new(),
+            pse_terms: 0,
+            f_in_terms: 0,
+            f_in,
+        }
+    }
+
     /// Candidate indices in the order chosen.
     pub fn order(&self) -> Vec<usize> {
         self.steps.iter().map(|s| s.chosen).collect()

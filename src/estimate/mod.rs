@@ -177,6 +177,18 @@ pub fn fit(
     acc: &Accumulator,
     options: &FitOptions,
 ) -> Result<Fit, EstimateError> {
+    let mut fit = fit_without_fsoa(structure, acc, options)?;
+    add_fsoa_tables(&mut fit, structure, acc, options)?;
+    Ok(fit)
+}
+
+/// [`fit`] with empty FSOA tables (no steps), which the estimates do not depend on: for
+/// the many refits of cross-validation and of a diagnosis that use only the estimates.
+pub(crate) fn fit_without_fsoa(
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    options: &FitOptions,
+) -> Result<Fit, EstimateError> {
     if acc.n_columns() != structure.columns.len() {
         return Err(EstimateError::ShapeMismatch {
             parameters: structure.params.len(),
@@ -192,7 +204,7 @@ pub fn fit(
     for axis in Axis::ALL {
         let (ols, report) = axis_ols(structure, acc, axis, options)?;
         identifiability.push(report);
-        let fsoa = fsoa(structure, acc, axis, options.f_in)?;
+        let fsoa = FsoaTable::empty(axis, options.f_in);
         axes.push(AxisFit { ols, fsoa });
     }
     let residual_covariance = residual_covariance(acc, &axes);
@@ -253,6 +265,20 @@ pub fn fit(
         metrics,
         identifiability,
     })
+}
+
+/// Fills in the FSOA tables (Algorithm 1) of `fit`, a [`fit_without_fsoa`] of
+/// `structure` on `acc`.
+pub(crate) fn add_fsoa_tables(
+    fit: &mut Fit,
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    options: &FitOptions,
+) -> Result<(), EstimateError> {
+    for (axis, a) in Axis::ALL.into_iter().zip(&mut fit.axes) {
+        a.fsoa = fsoa(structure, acc, axis, options.f_in)?;
+    }
+    Ok(())
 }
 
 /// R_ij = e_iᵀe_j/√((N − p_i)(N − p_j)) from the per-axis OLS residuals e_i = A w_i,
@@ -388,5 +414,67 @@ fn inference_withheld(acc: &Accumulator, axes: &[AxisFit], weighting: Weighting)
         )
     } else {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{ModelOptions, Workspace};
+    use crate::sample::{Sample, SampleChunk};
+    use crate::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+
+    /// The refits of cross-validation and of a diagnosis skip Algorithm 1; adding its
+    /// tables afterwards gives exactly the fit of [`fit`] (equal as values, so every
+    /// estimate, σ and metric is the same bits), and the estimates never depend on it.
+    #[test]
+    fn a_fit_without_fsoa_completed_equals_the_full_fit() {
+        let props = MassAndRotorProperties {
+            mass: 1.0,
+            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
+            air_density: 1.2,
+            rotor_radius: 0.1,
+            hub_height: 0.05,
+            rotor_inertia: 0.0,
+        };
+        let v = Vehicle::preset("q", Preset::QuadX, 0.25, 1.0, props).unwrap();
+        let structure = ModelStructure::eq22(&v, ModelOptions::default());
+        let mut chunk = SampleChunk::with_capacity(4, 2000, true);
+        for k in 0..2000 {
+            let f = k as f64;
+            let omega: Vec<f64> = (0..4)
+                .map(|i| 700.0 + 200.0 * (0.01 * f + i as f64).sin())
+                .collect();
+            chunk.push(&Sample {
+                t: 0.01 * f,
+                velocity: [
+                    3.0 * (0.003 * f).sin(),
+                    2.0 * (0.005 * f).cos(),
+                    (0.007 * f).sin(),
+                ],
+                rates: [
+                    (0.011 * f).sin(),
+                    (0.013 * f).cos(),
+                    0.5 * (0.017 * f).sin(),
+                ],
+                omega_dot: omega.iter().map(|w| 0.1 * w).collect(),
+                wrench: std::array::from_fn(|a| {
+                    (0.002 * f * (a + 1) as f64).sin() + omega[a % 4] * 1e-3
+                }),
+                omega,
+                ..Sample::default()
+            });
+        }
+        let mut acc = Accumulator::new(&structure);
+        acc.push(&structure, &chunk, &mut Workspace::default())
+            .unwrap();
+        let options = FitOptions::default();
+        let full = fit(&structure, &acc, &options).unwrap();
+        let mut lean = fit_without_fsoa(&structure, &acc, &options).unwrap();
+        assert!(lean.axes.iter().all(|a| a.fsoa.steps.is_empty()));
+        assert_eq!(lean.mmr, full.mmr);
+        assert!(full.axes.iter().all(|a| !a.fsoa.steps.is_empty()));
+        add_fsoa_tables(&mut lean, &structure, &acc, &options).unwrap();
+        assert_eq!(lean, full);
     }
 }
