@@ -64,7 +64,7 @@
 
 use crate::mixing::{Mixing, mix_row};
 use crate::sample::{Axis, Sample, SampleChunk};
-use crate::util::range_of;
+use crate::util::{range_of, range_of_slice};
 use crate::vehicle::{ConfigurationClass, Vehicle};
 
 /// A per-sample quantity that regressor terms multiply.
@@ -672,7 +672,7 @@ impl ModelStructure {
             capacity,
             ..
         } = ws;
-        let range = |v: &[f64]| range_of(v.iter().take(n).copied());
+        let range = |v: &[f64]| range_of_slice(&v[..n.min(v.len())]);
         for k in 0..3 {
             motion[k] = range(&chunk.velocity[k]);
             motion[3 + k] = range(&chunk.rates[k]);
@@ -699,7 +699,7 @@ impl ModelStructure {
                 Some(z) => dst.copy_from_slice(z),
                 None => dst.fill(0.0),
             }
-            measured[a] = range_of(dst.iter().copied());
+            measured[a] = range_of_slice(dst);
             for t in &self.known[a] {
                 apply_term(dst, t, false, -1.0, &lookup);
             }

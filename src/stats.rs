@@ -198,7 +198,8 @@ impl Accumulator {
         let q = self.rows();
         for u in 0..q {
             let col = self.data_column(ws, u);
-            if let Some(i) = col.iter().position(|v| !v.is_finite()) {
+            if !crate::util::all_finite(col) {
+                let i = col.iter().position(|v| !v.is_finite()).unwrap_or(0);
                 return Err(AccumulateError::NonFinite {
                     field: self.labels[self.representative[u]].clone(),
                     sample: self.count + i as u64,
@@ -207,7 +208,7 @@ impl Accumulator {
         }
         for j in 0..q {
             let col = self.data_column(ws, j);
-            let (lo, hi) = crate::util::range_of(col.iter().copied());
+            let (lo, hi) = crate::util::range_of_slice(col);
             self.min[j] = self.min[j].min(lo);
             self.max[j] = self.max[j].max(hi);
         }
