@@ -1624,17 +1624,18 @@ impl Workspace {
     }
 
     /// Rows `rows` (ascending sample indices) of `chunk`, last assembled into `self` with
-    /// `n_columns` columns, copied into `into` as if that part of `chunk` alone had been
-    /// assembled: regressors, outputs, and the measured and motion ranges (signals are
-    /// not copied).
-    pub fn gather(&self, chunk: &SampleChunk, rows: &[usize], n_columns: usize, into: &mut Self) {
+    /// `wanted.len()` columns, copied into `into` as if that part of `chunk` alone had
+    /// been assembled: the regressor columns j with `wanted[j]` (the others are left
+    /// unspecified), outputs, and the measured and motion ranges (signals are not
+    /// copied).
+    pub fn gather(&self, chunk: &SampleChunk, rows: &[usize], wanted: &[bool], into: &mut Self) {
         let m = rows.len();
-        into.prepare(m, n_columns, 0);
+        into.prepare(m, wanted.len(), 0);
         let cap = into.capacity;
         let pick = |src: &[f64], dst: &mut [f64]| {
             dst.iter_mut().zip(rows).for_each(|(d, &i)| *d = src[i]);
         };
-        for j in 0..n_columns {
+        for j in (0..wanted.len()).filter(|&j| wanted[j]) {
             pick(self.column(j), &mut into.columns[j * cap..j * cap + m]);
         }
         for axis in Axis::ALL {

@@ -1171,7 +1171,6 @@ impl SegmentState<'_> {
             if local_kind(self.role) == Some(to_validation) {
                 ext.regions
                     .push(
-                        &ext.structure,
                         part,
                         ws,
                         &mut share.local,

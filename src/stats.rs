@@ -240,6 +240,12 @@ impl Accumulator {
         Ok(())
     }
 
+    /// For each structure column, whether this accumulator stores its data (one column
+    /// per shape; the others are multiples of a stored one).
+    pub(crate) fn stored_columns(&self) -> &[bool] {
+        &self.stored
+    }
+
     /// Merges `other` (statistics of disjoint data) into `self`: afterwards `self` holds
     /// the statistics of the union, as if all samples had been pushed to one accumulator.
     pub fn merge(&mut self, other: &Accumulator) -> Result<(), AccumulateError> {

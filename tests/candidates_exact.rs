@@ -346,7 +346,8 @@ fn gathered_rows_equal_the_assembled_part() {
         Workspace::default(),
     );
     extended.assemble(&chunk, &mut ws).unwrap();
-    ws.gather(&chunk, &rows, extended.columns.len(), &mut gathered);
+    let every = vec![true; extended.columns.len()];
+    ws.gather(&chunk, &rows, &every, &mut gathered);
     extended.assemble(&chunk_of(&rows), &mut direct).unwrap();
     assert_eq!(gathered.len(), rows.len());
     for j in 0..extended.columns.len() {

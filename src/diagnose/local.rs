@@ -83,14 +83,13 @@ impl LocalRegions {
     }
 
     /// Pushes the samples of `chunk` where each region's candidate acts into that
-    /// region's accumulator in `into` (one per region, over `extended`). `assembled` must
-    /// hold `chunk` assembled by `extended`: the active rows are gathered from it rather
+    /// region's accumulator in `into` (one per region, from [`Self::accumulators`]).
+    /// `assembled` must hold `chunk` as those accumulators' `push` assembles it: the active rows are gathered from it rather
     /// than assembled again (every regressor is a function of its own sample, so this is
     /// the same as assembling the active part). `active_ws` takes the activity signals,
     /// `part_ws` the gathered rows (both reused across chunks).
     pub fn push(
         &self,
-        extended: &ModelStructure,
         chunk: &SampleChunk,
         assembled: &Workspace,
         into: &mut [Accumulator],
@@ -107,7 +106,7 @@ impl LocalRegions {
         for (k, acc) in into.iter_mut().enumerate() {
             active_rows(active_ws.column(k), self.thresholds[k], &mut rows);
             if !rows.is_empty() {
-                assembled.gather(chunk, &rows, extended.columns.len(), part_ws);
+                assembled.gather(chunk, &rows, acc.stored_columns(), part_ws);
                 acc.push_assembled(part_ws)?;
             }
         }

@@ -1319,14 +1319,8 @@ pub fn diagnose_chunks(
         extended
             .assemble(c, &mut ws)
             .map_err(AccumulateError::from)?;
-        set.regions.push(
-            &extended,
-            c,
-            &ws,
-            &mut local_tests,
-            &mut active_ws,
-            &mut part_ws,
-        )?;
+        set.regions
+            .push(c, &ws, &mut local_tests, &mut active_ws, &mut part_ws)?;
     }
     let folds = Folds::holdout("validation data", fa.clone(), va);
     let local: Vec<LocalFolds> = set
