@@ -111,12 +111,13 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
     }
     let r = triangular_factor(a);
     let r11 = Mat::from_fn(k, k, |i, j| if j >= i { r[(i, j)] } else { 0.0 });
-    let conditioning = singular_values_of(&r11);
+    let rinv = upper_inverse(&r11);
+    let conditioning = conditioning_with(&r11, false, &rinv);
     if !conditioning.weak_directions(rank_tol).is_empty() {
         // The singular vectors name the aliased columns: worth their cost only here. The
         // values stay those the rank was decided on, so the weak directions are the ones
         // found (a second SVD may round σ_min to the other side of the tolerance).
-        let mut deficient = conditioning_of(&r11);
+        let mut deficient = conditioning_with(&r11, true, &rinv);
         deficient.singular_values = conditioning.singular_values;
         return Err(RankDeficient {
             conditioning: deficient,
@@ -126,12 +127,13 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
     let theta_s = back_substitute(&r11, &rhs);
     let theta = theta_s.iter().zip(&scale).map(|(t, d)| t / d).collect();
     let sse = r[(k, k)].powi(2);
-    let rinv = upper_inverse(&r11);
+    // Symmetric: entry (j, i) is the same sum of the same products.
     let mut xtx_inv = vec![0.0; k * k];
     for i in 0..k {
-        for j in 0..k {
-            let s: f64 = (i.max(j)..k).map(|l| rinv[(i, l)] * rinv[(j, l)]).sum();
+        for j in i..k {
+            let s: f64 = (j..k).map(|l| rinv[(i, l)] * rinv[(j, l)]).sum();
             xtx_inv[i * k + j] = s / (scale[i] * scale[j]);
+            xtx_inv[j * k + i] = s / (scale[j] * scale[i]);
         }
     }
     Ok(LeastSquares {
@@ -144,16 +146,13 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
 
 /// Singular values, right singular vectors and VIFs of an equilibrated triangular factor.
 pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
-    conditioning_with(r11, true)
+    conditioning_with(r11, true, &upper_inverse(r11))
 }
 
-/// [`conditioning_of`] without the singular vectors (`vectors` empty): the solve of a
-/// design of full rank needs its singular values and VIFs only.
-fn singular_values_of(r11: &Mat<f64>) -> Conditioning {
-    conditioning_with(r11, false)
-}
-
-fn conditioning_with(r11: &Mat<f64>, with_vectors: bool) -> Conditioning {
+/// [`conditioning_of`] with `rinv` = R11⁻¹, and the singular vectors only when
+/// `with_vectors` (else `vectors` is empty: the solve of a design of full rank needs its
+/// singular values and VIFs only).
+fn conditioning_with(r11: &Mat<f64>, with_vectors: bool, rinv: &Mat<f64>) -> Conditioning {
     let k = r11.ncols();
     let (singular_values, vectors) = match singular_value_decomposition(r11, with_vectors) {
         Ok((s, v)) => {
@@ -175,7 +174,6 @@ fn conditioning_with(r11: &Mat<f64>, with_vectors: bool) -> Conditioning {
     let vif = if singular {
         vec![f64::INFINITY; k]
     } else {
-        let rinv = upper_inverse(r11);
         (0..k)
             .map(|i| (i..k).map(|l| rinv[(i, l)].powi(2)).sum())
             .collect()
