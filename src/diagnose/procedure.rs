@@ -80,6 +80,7 @@ use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 
 use super::candidates::{Candidate, EffectKind};
 use super::local::LocalFolds;
+use crate::estimate::SingularValues;
 use crate::estimate::{self, AxisMetrics, CrossValidation, EstimateError, Fit, FitOptions, Folds};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
@@ -419,7 +420,14 @@ fn trial(
 ) -> Result<Trial, EstimateError> {
     let structure = stats.extended.select_columns(columns);
     let columns = columns.to_vec();
-    let fit = estimate::fit_without_fsoa(&structure, &stats.fit.select(&columns), options)?;
+    // The conditioning of a trial is not read: only the adopted model's is reported, from
+    // a refit (`diagnose_on_threads`).
+    let fit = estimate::fit_without_fsoa(
+        &structure,
+        &stats.fit.select(&columns),
+        options,
+        SingularValues::WhenRankInDoubt,
+    )?;
     let cv = estimate::cross_validate(&structure, &stats.folds.select(&columns), options)?;
     let mut std = vec![0.0; structure.params.len()];
     let mut p = vec![1.0; structure.params.len()];
@@ -589,8 +597,14 @@ pub fn diagnose_on_threads(
         .transpose()?;
     let fold_metrics =
         |cv: &CrossValidation| (0..cv.folds.len()).map(|j| cv.fold_metrics(j)).collect();
-    let mut fit = current.fit;
     let fitted = stats.fit.select(&current.columns);
+    // The adopted model's trial fit again, with its condition numbers: the same estimates.
+    let mut fit = estimate::fit_without_fsoa(
+        &current.structure,
+        &fitted,
+        fit_options,
+        SingularValues::Always,
+    )?;
     estimate::add_fsoa_tables(&mut fit, &current.structure, &fitted, fit_options)?;
     Ok(Diagnosis {
         steps,

@@ -16,7 +16,7 @@ use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
 use super::EstimateError;
-use super::lstsq;
+use super::lstsq::{self, SingularValues};
 use super::ols::{compressed, term_name};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
@@ -219,7 +219,7 @@ pub fn score_addition(
             return Ok(dot(&z, &z));
         }
         let (x, z) = compressed(acc, cols, axis);
-        lstsq::solve(&x, &z, ALIAS_TOL)
+        lstsq::solve(&x, &z, ALIAS_TOL, SingularValues::Always)
             .map(|ls| ls.sse)
             .map_err(|d| EstimateError::Unidentifiable {
                 problem: format!("candidate scoring {axis}"),

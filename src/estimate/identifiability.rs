@@ -6,7 +6,7 @@
 use faer::Mat;
 use serde::Serialize;
 
-use super::lstsq::{self, LeastSquares};
+use super::lstsq::{self, LeastSquares, SingularValues};
 use super::{EstimateError, FitOptions, UnidentifiablePolicy};
 use crate::model::{ModelStructure, Signal};
 use crate::stats::Accumulator;
@@ -45,13 +45,15 @@ pub struct DroppedTerm {
 /// design is numerically singular, either refuses (error naming the involved terms) or
 /// drops the term with the largest weight in the weakest direction and retries, per
 /// `options`. A term dropped alone (its column is zero) gets `zero_cause(column)` as its
-/// cause. Returns the solution, the indices of the kept columns and the report.
+/// cause. Returns the solution, the indices of the kept columns and the report (its
+/// condition number NaN when `singular_values` let the solve skip them).
 pub(crate) fn solve_identifiable(
     problem: &str,
     x: &Mat<f64>,
     z: &[f64],
     names: &[String],
     options: &FitOptions,
+    singular_values: SingularValues,
     zero_cause: &dyn Fn(usize) -> String,
 ) -> Result<(LeastSquares, Vec<usize>, ProblemConditioning), EstimateError> {
     let mut kept: Vec<usize> = (0..x.ncols()).collect();
@@ -90,7 +92,7 @@ pub(crate) fn solve_identifiable(
             return Ok((ls, kept, report));
         }
         let sub = Mat::from_fn(x.nrows(), kept.len(), |i, j| x[(i, kept[j])]);
-        match lstsq::solve(&sub, z, options.rank_tol) {
+        match lstsq::solve(&sub, z, options.rank_tol, singular_values) {
             Ok(ls) => {
                 let report = ProblemConditioning {
                     problem: problem.into(),

@@ -29,10 +29,24 @@ pub(crate) struct LeastSquares {
     pub conditioning: Conditioning,
 }
 
+/// Whether a solve computes the singular values of its design.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum SingularValues {
+    /// Always: the condition number is reported.
+    Always,
+    /// Only when the bound κ ≤ ‖R‖_F ‖R⁻¹‖_F (R⁻¹ is computed anyway) leaves the rank in
+    /// doubt, i.e. exceeds 10⁻³/`rank_tol`: below that the SVD could only find full
+    /// rank, so the estimates are those of [`SingularValues::Always`] bit for bit and
+    /// only the condition number is missing (NaN). For refits whose conditioning
+    /// nobody reads (cross-validation folds, diagnosis trials); the SVD is ~¼ of them.
+    WhenRankInDoubt,
+}
+
 /// Conditioning of an equilibrated design (every column scaled to unit norm).
 #[derive(Debug, Clone)]
 pub(crate) struct Conditioning {
-    /// Singular values, largest first.
+    /// Singular values, largest first; empty when [`SingularValues::WhenRankInDoubt`]
+    /// skipped them (the design has columns but no singular values).
     pub singular_values: Vec<f64>,
     /// Right singular vectors, `vectors[i]` belongs to `singular_values[i]` (empty in the
     /// conditioning of a successful [`solve`]: only a rank-deficient design needs them).
@@ -43,8 +57,12 @@ pub(crate) struct Conditioning {
 }
 
 impl Conditioning {
-    /// σ_max / σ_min (infinite when σ_min = 0).
+    /// σ_max / σ_min (infinite when σ_min = 0; NaN when the singular values were
+    /// skipped).
     pub fn condition_number(&self) -> f64 {
+        if self.singular_values.is_empty() && !self.vif.is_empty() {
+            return f64::NAN;
+        }
         let max = self.singular_values.first().copied().unwrap_or(0.0);
         let min = self.singular_values.last().copied().unwrap_or(0.0);
         if min > 0.0 { max / min } else { f64::INFINITY }
@@ -91,8 +109,14 @@ pub(crate) struct RankDeficient {
 
 /// Solves min ‖X θ − z‖ for `x` (rows × k) and `z` (rows), equilibrating the columns of
 /// X to unit norm before a Householder QR of [X D⁻¹ | z]. Fails when the equilibrated
-/// X has σ_min ≤ `rank_tol` σ_max.
-pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquares, RankDeficient> {
+/// X has σ_min ≤ `rank_tol` σ_max. `singular_values` says whether the conditioning
+/// reports them when they decide nothing.
+pub(crate) fn solve(
+    x: &Mat<f64>,
+    z: &[f64],
+    rank_tol: f64,
+    singular_values: SingularValues,
+) -> Result<LeastSquares, RankDeficient> {
     let (rows, k) = (x.nrows(), x.ncols());
     let scale: Vec<f64> = (0..k)
         .map(|j| {
@@ -112,12 +136,23 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
     let r = triangular_factor(a);
     let r11 = Mat::from_fn(k, k, |i, j| if j >= i { r[(i, j)] } else { 0.0 });
     let rinv = upper_inverse(&r11);
-    let conditioning = conditioning_with(&r11, false, &rinv);
+    let vif = variance_inflation(&rinv);
+    let skip = singular_values == SingularValues::WhenRankInDoubt
+        && proven_full_rank(&r11, &vif, rank_tol);
+    let conditioning = if skip {
+        Conditioning {
+            singular_values: Vec::new(),
+            vectors: Vec::new(),
+            vif,
+        }
+    } else {
+        conditioning_with(&r11, false, vif.clone())
+    };
     if !conditioning.weak_directions(rank_tol).is_empty() {
         // The singular vectors name the aliased columns: worth their cost only here. The
         // values stay those the rank was decided on, so the weak directions are the ones
         // found (a second SVD may round σ_min to the other side of the tolerance).
-        let mut deficient = conditioning_with(&r11, true, &rinv);
+        let mut deficient = conditioning_with(&r11, true, conditioning.vif.clone());
         deficient.singular_values = conditioning.singular_values;
         return Err(RankDeficient {
             conditioning: deficient,
@@ -144,15 +179,37 @@ pub(crate) fn solve(x: &Mat<f64>, z: &[f64], rank_tol: f64) -> Result<LeastSquar
     })
 }
 
-/// Singular values, right singular vectors and VIFs of an equilibrated triangular factor.
-pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
-    conditioning_with(r11, true, &upper_inverse(r11))
+/// Whether ‖R‖_F ‖R⁻¹‖_F ≥ σ_max/σ_min (from ‖R⁻¹‖²_F = Σ `vif`) proves σ_min/σ_max
+/// ≥ 10³ `rank_tol`: then a computed SVD, accurate to ~kε σ_max, cannot put σ_min at or
+/// below `rank_tol` σ_max. False for NaN (the SVD decides).
+fn proven_full_rank(r11: &Mat<f64>, vif: &[f64], rank_tol: f64) -> bool {
+    let k = r11.ncols();
+    let r_norm2: f64 = (0..k)
+        .flat_map(|j| (0..=j).map(move |i| (i, j)))
+        .map(|(i, j)| r11[(i, j)].powi(2))
+        .sum();
+    let bound = (r_norm2 * vif.iter().sum::<f64>()).sqrt();
+    bound * rank_tol < 1e-3
 }
 
-/// [`conditioning_of`] with `rinv` = R11⁻¹, and the singular vectors only when
-/// `with_vectors` (else `vectors` is empty: the solve of a design of full rank needs its
-/// singular values and VIFs only).
-fn conditioning_with(r11: &Mat<f64>, with_vectors: bool, rinv: &Mat<f64>) -> Conditioning {
+/// Uncentred VIFs of an equilibrated design from `rinv` = R11⁻¹: the row sums of squares
+/// of R11⁻¹ (the diagonal of (CᵀC)⁻¹).
+fn variance_inflation(rinv: &Mat<f64>) -> Vec<f64> {
+    let k = rinv.ncols();
+    (0..k)
+        .map(|i| (i..k).map(|l| rinv[(i, l)].powi(2)).sum())
+        .collect()
+}
+
+/// Singular values, right singular vectors and VIFs of an equilibrated triangular factor.
+pub(crate) fn conditioning_of(r11: &Mat<f64>) -> Conditioning {
+    conditioning_with(r11, true, variance_inflation(&upper_inverse(r11)))
+}
+
+/// [`conditioning_of`] with the VIFs `vif` of R11 (infinite instead when σ_min = 0), and
+/// the singular vectors only when `with_vectors` (else `vectors` is empty: the solve of
+/// a design of full rank needs its singular values and VIFs only).
+fn conditioning_with(r11: &Mat<f64>, with_vectors: bool, vif: Vec<f64>) -> Conditioning {
     let k = r11.ncols();
     let (singular_values, vectors) = match singular_value_decomposition(r11, with_vectors) {
         Ok((s, v)) => {
@@ -174,9 +231,7 @@ fn conditioning_with(r11: &Mat<f64>, with_vectors: bool, rinv: &Mat<f64>) -> Con
     let vif = if singular {
         vec![f64::INFINITY; k]
     } else {
-        (0..k)
-            .map(|i| (i..k).map(|l| rinv[(i, l)].powi(2)).sum())
-            .collect()
+        vif
     };
     Conditioning {
         singular_values,
@@ -252,4 +307,62 @@ fn upper_inverse(u: &Mat<f64>) -> Mat<f64> {
         }
     }
     inv
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `rows` × 4 design whose last column is the first plus `eps` times a fourth
+    /// independent direction (condition number ~1/`eps`), and a target.
+    fn design(rows: usize, eps: f64) -> (Mat<f64>, Vec<f64>) {
+        let t = |i: usize| i as f64 / rows as f64;
+        let x = Mat::from_fn(rows, 4, |i, j| {
+            let s = t(i);
+            match j {
+                0 => 1.0 + s,
+                1 => (7.0 * s).sin(),
+                2 => s * s,
+                _ => 1.0 + s + eps * (13.0 * s).cos(),
+            }
+        });
+        let z = (0..rows).map(|i| 2.0 - t(i) + (3.0 * t(i)).cos()).collect();
+        (x, z)
+    }
+
+    #[test]
+    fn skipping_the_singular_values_of_a_full_rank_design_changes_no_estimate() {
+        let (x, z) = design(200, 0.5);
+        let all = solve(&x, &z, 1e-10, SingularValues::Always).unwrap();
+        let lean = solve(&x, &z, 1e-10, SingularValues::WhenRankInDoubt).unwrap();
+        assert_eq!(lean.theta, all.theta);
+        assert_eq!(lean.sse.to_bits(), all.sse.to_bits());
+        assert_eq!(lean.xtx_inv, all.xtx_inv);
+        assert_eq!(lean.conditioning.vif, all.conditioning.vif);
+        assert!(lean.conditioning.singular_values.is_empty());
+        assert!(lean.conditioning.condition_number().is_nan());
+        let kappa = all.conditioning.condition_number();
+        assert!(kappa.is_finite() && kappa > 1.0, "κ = {kappa}");
+    }
+
+    #[test]
+    fn a_design_near_the_rank_tolerance_still_gets_its_svd() {
+        // κ ~ 1e9: below 1/rank_tol = 1e10, but above the bound's 1e7 margin, so the
+        // SVD decides (and reports) as it always does.
+        let (x, z) = design(200, 1e-9);
+        let all = solve(&x, &z, 1e-10, SingularValues::Always).unwrap();
+        let lean = solve(&x, &z, 1e-10, SingularValues::WhenRankInDoubt).unwrap();
+        assert_eq!(
+            lean.conditioning.singular_values,
+            all.conditioning.singular_values
+        );
+        assert!(all.conditioning.condition_number() > 1e7);
+        // Past the tolerance both refuse with the same weak direction.
+        let (x, z) = design(200, 1e-13);
+        let a = solve(&x, &z, 1e-10, SingularValues::Always).unwrap_err();
+        let b = solve(&x, &z, 1e-10, SingularValues::WhenRankInDoubt).unwrap_err();
+        assert_eq!(a.conditioning.worst(), b.conditioning.worst());
+        assert_eq!(a.conditioning.involved(1e-10), vec![0, 3]);
+        assert_eq!(b.conditioning.involved(1e-10), vec![0, 3]);
+    }
 }

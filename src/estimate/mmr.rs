@@ -13,7 +13,7 @@
 use faer::Mat;
 
 use super::identifiability::{ProblemConditioning, solve_identifiable, zero_column_cause};
-use super::lstsq::LeastSquares;
+use super::lstsq::{LeastSquares, SingularValues};
 use super::{EstimateError, FitOptions};
 use crate::model::ModelStructure;
 use crate::stats::Accumulator;
@@ -75,13 +75,15 @@ pub(crate) fn weights(
     (w, l, weighting)
 }
 
-/// Solves Eq. 24 for all parameters of `structure` with weights from `r`.
+/// Solves Eq. 24 for all parameters of `structure` with weights from `r`, computing the
+/// singular values of the design as `singular_values` says.
 pub(crate) fn solve(
     structure: &ModelStructure,
     acc: &Accumulator,
     r: &[[f64; 6]; 6],
     floor: &[f64; 6],
     options: &FitOptions,
+    singular_values: SingularValues,
 ) -> Result<MmrSolution, EstimateError> {
     let (weight, l, weighting) = weights(r, floor);
     let np = structure.params.len();
@@ -112,7 +114,8 @@ pub(crate) fn solve(
             .collect();
         zero_column_cause(structure, acc, &cols)
     };
-    let (ls, params, conditioning) = solve_identifiable("MMR", &g, &rhs, &names, options, &cause)?;
+    let (ls, params, conditioning) =
+        solve_identifiable("MMR", &g, &rhs, &names, options, singular_values, &cause)?;
     Ok(MmrSolution {
         ls,
         params,

@@ -31,6 +31,7 @@ pub use identifiability::{DroppedTerm, ProblemConditioning};
 pub use inference::{
     AxisMetrics, ErrorSums, OverallMetrics, ParameterEstimate, error_sums, evaluate,
 };
+pub(crate) use lstsq::SingularValues;
 pub use mmr::Weighting;
 pub use ols::{AxisOls, axis_ols};
 
@@ -177,17 +178,20 @@ pub fn fit(
     acc: &Accumulator,
     options: &FitOptions,
 ) -> Result<Fit, EstimateError> {
-    let mut fit = fit_without_fsoa(structure, acc, options)?;
+    let mut fit = fit_without_fsoa(structure, acc, options, SingularValues::Always)?;
     add_fsoa_tables(&mut fit, structure, acc, options)?;
     Ok(fit)
 }
 
 /// [`fit`] with empty FSOA tables (no steps), which the estimates do not depend on: for
-/// the many refits of cross-validation and of a diagnosis that use only the estimates.
+/// the many refits of cross-validation and of a diagnosis that use only the estimates
+/// (with [`SingularValues::WhenRankInDoubt`], which leaves the estimates as they are and
+/// the condition numbers NaN).
 pub(crate) fn fit_without_fsoa(
     structure: &ModelStructure,
     acc: &Accumulator,
     options: &FitOptions,
+    singular_values: SingularValues,
 ) -> Result<Fit, EstimateError> {
     if acc.n_columns() != structure.columns.len() {
         return Err(EstimateError::ShapeMismatch {
@@ -202,7 +206,7 @@ pub(crate) fn fit_without_fsoa(
     let mut axes = Vec::with_capacity(6);
     let mut identifiability = Vec::new();
     for axis in Axis::ALL {
-        let (ols, report) = axis_ols(structure, acc, axis, options)?;
+        let (ols, report) = ols::axis_ols_with(structure, acc, axis, options, singular_values)?;
         identifiability.push(report);
         let fsoa = FsoaTable::empty(axis, options.f_in);
         axes.push(AxisFit { ols, fsoa });
@@ -213,7 +217,14 @@ pub(crate) fn fit_without_fsoa(
         let zc = acc.output_index(a);
         (f64::EPSILON.powi(2) * acc.cross(zc, zc) / n).max(f64::MIN_POSITIVE)
     });
-    let sol = mmr::solve(structure, acc, &residual_covariance, &floor, options)?;
+    let sol = mmr::solve(
+        structure,
+        acc,
+        &residual_covariance,
+        &floor,
+        options,
+        singular_values,
+    )?;
     identifiability.push(sol.conditioning);
     let k = sol.params.len();
     if n <= k as f64 {
@@ -470,7 +481,8 @@ mod tests {
             .unwrap();
         let options = FitOptions::default();
         let full = fit(&structure, &acc, &options).unwrap();
-        let mut lean = fit_without_fsoa(&structure, &acc, &options).unwrap();
+        let mut lean =
+            fit_without_fsoa(&structure, &acc, &options, SingularValues::Always).unwrap();
         assert!(lean.axes.iter().all(|a| a.fsoa.steps.is_empty()));
         assert_eq!(lean.mmr, full.mmr);
         assert!(full.axes.iter().all(|a| !a.fsoa.steps.is_empty()));

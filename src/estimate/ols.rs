@@ -6,6 +6,7 @@ use faer::Mat;
 use serde::Serialize;
 
 use super::identifiability::{ProblemConditioning, solve_identifiable, zero_column_cause};
+use super::lstsq::SingularValues;
 use super::{EstimateError, FitOptions};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
@@ -70,6 +71,17 @@ pub fn axis_ols(
     axis: Axis,
     options: &FitOptions,
 ) -> Result<(AxisOls, ProblemConditioning), EstimateError> {
+    axis_ols_with(structure, acc, axis, options, SingularValues::Always)
+}
+
+/// [`axis_ols`], computing the singular values of the design as `singular_values` says.
+pub(crate) fn axis_ols_with(
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    axis: Axis,
+    options: &FitOptions,
+    singular_values: SingularValues,
+) -> Result<(AxisOls, ProblemConditioning), EstimateError> {
     let cols: Vec<usize> = structure.axis_columns(axis).collect();
     let names: Vec<String> = cols.iter().map(|&c| term_name(structure, c)).collect();
     let n = acc.count() as f64;
@@ -81,8 +93,15 @@ pub fn axis_ols(
     }
     let (x, z) = compressed(acc, &cols, axis);
     let cause = |j: usize| zero_column_cause(structure, acc, &[cols[j]]);
-    let (ls, kept, report) =
-        solve_identifiable(&format!("OLS {axis}"), &x, &z, &names, options, &cause)?;
+    let (ls, kept, report) = solve_identifiable(
+        &format!("OLS {axis}"),
+        &x,
+        &z,
+        &names,
+        options,
+        singular_values,
+        &cause,
+    )?;
     let k = kept.len();
     let dof = n - k as f64;
     let residual_variance = ls.sse / dof;
