@@ -547,8 +547,7 @@ impl ModelStructure {
         let cols: Vec<usize> = (0..self.columns.len())
             .filter(|&j| keep.contains(&self.columns[j].param))
             .collect();
-        let mut s = self.clone();
-        s.columns = cols
+        let columns = cols
             .iter()
             .map(|&j| {
                 let mut c = self.columns[j].clone();
@@ -559,9 +558,29 @@ impl ModelStructure {
                 c
             })
             .collect();
-        s.params = keep.iter().map(|&p| self.params[p].clone()).collect();
+        let params = keep.iter().map(|&p| self.params[p].clone()).collect();
+        (self.with_columns(params, columns), cols)
+    }
+
+    /// This structure's vehicle, options and known terms with `params` and `columns`
+    /// (whose `param` indices point into `params`) instead of its own.
+    fn with_columns(&self, params: Vec<Parameter>, columns: Vec<Column>) -> ModelStructure {
+        let mut s = ModelStructure {
+            params,
+            columns,
+            known: self.known.clone(),
+            options: self.options,
+            rotor_count: self.rotor_count,
+            mixing: self.mixing.clone(),
+            inflow_weights: self.inflow_weights.clone(),
+            required: Vec::new(),
+            rotor_radius: self.rotor_radius,
+            hub_height: self.hub_height,
+            hubs: self.hubs.clone(),
+            nu0: self.nu0,
+        };
         s.required = s.collect_required_signals();
-        (s, cols)
+        s
     }
 
     /// True for a control-effectiveness column: state-independent and quadratic in the
@@ -581,8 +600,7 @@ impl ModelStructure {
         let mut used: Vec<usize> = cols.iter().map(|&j| self.columns[j].param).collect();
         used.sort_unstable();
         used.dedup();
-        let (mut s, _) = self.subset(&used);
-        s.columns = cols
+        let columns = cols
             .iter()
             .map(|&j| {
                 let mut c = self.columns[j].clone();
@@ -590,8 +608,8 @@ impl ModelStructure {
                 c
             })
             .collect();
-        s.required = s.collect_required_signals();
-        s
+        let params = used.iter().map(|&p| self.params[p].clone()).collect();
+        self.with_columns(params, columns)
     }
 
     /// Checks that `chunk` can be assembled with this structure.
