@@ -236,11 +236,36 @@ impl Basis {
         v
     }
 
-    /// ‖x − QQᵀx‖² computed as ‖x‖² − ‖Qᵀx‖², floored at zero.
-    fn orthogonal_norm2(&self, x: &[f64]) -> f64 {
-        let proj: f64 = self.q.iter().map(|q| dot(q, x).powi(2)).sum();
-        (dot(x, x) - proj).max(0.0)
+    /// ‖x − QQᵀx‖² computed as ‖x‖² − ‖Qᵀx‖², floored at zero, and ‖x‖², for the `x`
+    /// whose [`Projection`] is `known`: only the basis vectors added since `known` was
+    /// last brought up to date are projected on (the sum of squares keeps its order, so
+    /// the value is that of projecting on the whole basis at once).
+    fn orthogonal_norm2(&self, x: &[f64], known: &mut Projection) -> (f64, f64) {
+        let xx = *known.xx.get_or_insert_with(|| dot(x, x));
+        for q in &self.q[known.basis..] {
+            known.sum += dot(q, x).powi(2);
+        }
+        known.basis = self.q.len();
+        ((xx - known.sum).max(0.0), xx)
     }
+}
+
+/// What [`Basis::orthogonal_norm2`] has computed of one vector x: ‖x‖² and ‖Qᵀx‖² over
+/// the first `basis` vectors of the basis.
+#[derive(Debug, Clone, Copy)]
+struct Projection {
+    xx: Option<f64>,
+    /// Σ (qᵀx)² in basis order, from −0 as `f64`'s `Sum` starts.
+    sum: f64,
+    basis: usize,
+}
+
+impl Projection {
+    const NONE: Self = Self {
+        xx: None,
+        sum: -0.0,
+        basis: 0,
+    };
 }
 
 /// One monomial kept by the screening.
@@ -306,6 +331,8 @@ fn screen_axis(
         basis.add(ws.column(j));
     }
     let mut r = basis.residual(ws.output(axis));
+    // The basis only grows: each monomial's projection is extended, never recomputed.
+    let mut known = vec![Projection::NONE; pool.len()];
     for _ in 0..options.per_axis {
         let sse = dot(&r, &r);
         let dof = n as f64 - basis.q.len() as f64 - 1.0;
@@ -316,8 +343,8 @@ fn screen_axis(
         // already in the span of the basis.
         let mut best: Option<(usize, f64)> = None;
         monomials.for_each(|j, g| {
-            let g2 = basis.orthogonal_norm2(g);
-            if g2 > 1e-9 * dot(g, g) {
+            let (g2, gg) = basis.orthogonal_norm2(g, &mut known[j]);
+            if g2 > 1e-9 * gg {
                 let gain = dot(g, &r).powi(2) / g2;
                 if best.is_none_or(|(_, b)| gain.total_cmp(&b).is_ge()) {
                     best = Some((j, gain));
