@@ -75,6 +75,14 @@ pub fn all_finite(values: &[f64]) -> bool {
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let split = n / 8 * 8;
+    let tail: f64 = a[split..n]
+        .iter()
+        .zip(&b[split..n])
+        .map(|(x, y)| x * y)
+        .sum();
+    if split == 0 {
+        return tail;
+    }
     // Partial sums 0–3 and 4–7 as two arrays of four, each one AVX2 register. The
     // combination below is hidden from the optimiser: seeing it, the compiler laid the
     // sums out in the order it adds them, in two-lane registers and shuffles per step.
@@ -88,12 +96,7 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let (lo, hi) = std::hint::black_box((lo, hi));
     let pair = |k: usize| lo[k] + hi[k];
     let head = (pair(0) + pair(1)) + (pair(2) + pair(3));
-    let tail: f64 = a[split..n]
-        .iter()
-        .zip(&b[split..n])
-        .map(|(x, y)| x * y)
-        .sum();
-    if split > 0 { head + tail } else { tail }
+    head + tail
 }
 
 /// Cross product a × b.
