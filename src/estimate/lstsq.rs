@@ -146,14 +146,19 @@ pub(crate) fn solve(
             vif,
         }
     } else {
-        conditioning_with(&r11, false, vif.clone())
+        conditioning_with(&r11, false, vif)
     };
     if !conditioning.weak_directions(rank_tol).is_empty() {
         // The singular vectors name the aliased columns: worth their cost only here. The
         // values stay those the rank was decided on, so the weak directions are the ones
         // found (a second SVD may round σ_min to the other side of the tolerance).
-        let mut deficient = conditioning_with(&r11, true, conditioning.vif.clone());
-        deficient.singular_values = conditioning.singular_values;
+        let Conditioning {
+            singular_values,
+            vif,
+            ..
+        } = conditioning;
+        let mut deficient = conditioning_with(&r11, true, vif);
+        deficient.singular_values = singular_values;
         return Err(RankDeficient {
             conditioning: deficient,
         });
