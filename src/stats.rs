@@ -35,7 +35,7 @@ use std::hash::{DefaultHasher, Hasher};
 use faer::{Mat, MatMut};
 pub(crate) use triangular_update::{FoldScratch, fold_rows};
 
-use crate::model::{ModelError, ModelStructure, Workspace};
+use crate::model::{Column, ModelError, ModelStructure, Workspace};
 use crate::sample::{Axis, SampleChunk};
 
 /// Why a chunk could not be accumulated.
@@ -141,18 +141,7 @@ impl Accumulator {
         let p = structure.columns.len();
         let mut labels: Vec<String> = structure.columns.iter().map(column_field).collect();
         labels.extend(Axis::ALL.iter().map(|a| format!("output {a}")));
-        let mut shape = Vec::with_capacity(p + 6);
-        let mut representative: Vec<usize> = Vec::new();
-        for (j, col) in structure.columns.iter().enumerate() {
-            let found = representative
-                .iter()
-                .enumerate()
-                .find_map(|(u, &rep)| proportion(&structure.columns[rep], col).map(|f| (u, f)));
-            shape.push(found.unwrap_or_else(|| {
-                representative.push(j);
-                (representative.len() - 1, 1.0)
-            }));
-        }
+        let (mut shape, mut representative) = column_shapes(&structure.columns);
         for a in 0..6 {
             representative.push(p + a);
             shape.push((representative.len() - 1, 1.0));
@@ -468,9 +457,28 @@ impl Accumulator {
     }
 }
 
+/// The distinct shapes of `columns`: for each column its shape index and the factor f
+/// with column = f × the shape's representative column, and the representative (first
+/// column) of each shape in order.
+pub(crate) fn column_shapes(columns: &[Column]) -> (Vec<(usize, f64)>, Vec<usize>) {
+    let mut shape = Vec::with_capacity(columns.len() + 6);
+    let mut representative: Vec<usize> = Vec::new();
+    for (j, col) in columns.iter().enumerate() {
+        let found = representative
+            .iter()
+            .enumerate()
+            .find_map(|(u, &rep)| proportion(&columns[rep], col).map(|f| (u, f)));
+        shape.push(found.unwrap_or_else(|| {
+            representative.push(j);
+            (representative.len() - 1, 1.0)
+        }));
+    }
+    (shape, representative)
+}
+
 /// f with `col` = f × `rep` for every sample, when the two columns have the same
 /// factors term by term and proportional coefficients (to rounding).
-fn proportion(rep: &crate::model::Column, col: &crate::model::Column) -> Option<f64> {
+fn proportion(rep: &Column, col: &Column) -> Option<f64> {
     if rep.terms.len() != col.terms.len() {
         return None;
     }
@@ -482,7 +490,7 @@ fn proportion(rep: &crate::model::Column, col: &crate::model::Column) -> Option<
 }
 
 /// `label (axis)` of a column, for error messages.
-fn column_field(c: &crate::model::Column) -> String {
+fn column_field(c: &Column) -> String {
     format!("regressor column {} ({})", c.label, c.axis)
 }
 
