@@ -22,8 +22,12 @@
 //! minutes. The second log of the two-log runs is the first shifted in time once more
 //! (same size, different bytes). Nothing is written into the repository.
 //!
-//! Each timing is one run after a warm-up read of the file (page cache warm for all):
-//! on a shared machine take the figures as indicative and rerun.
+//! Every configuration runs `$MRSYSID_BENCH_REPEAT` times (default 3; with a before
+//! binary the two alternate) after a warm-up read of the files (page cache warm for all),
+//! and the fastest run is reported, with the largest peak RSS of its runs. Pass (a) is
+//! timed before the fits and again after each configuration, and the ratios are taken
+//! against its fastest pass: on a shared machine whose speed drifts, the minima of
+//! interleaved runs are what the ratios compare.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, BufWriter, Write};
@@ -72,11 +76,20 @@ fn main() {
     println!("log: {} ({} rows, {} MB)", log.display(), rows, mb(&log));
 
     bare_pass(&log, false); // warm the page cache
-    let (bare, records) = bare_pass(&log, false);
-    assert_eq!(records, rows, "bare pass record count");
-    let (parse, _) = bare_pass(&log, true);
     bare_pass(&second, false);
-    let parse_two = bare_pass(&log, true).0 + bare_pass(&second, true).0;
+    let repeat = repetitions();
+    // Pass (a) is timed once before the fits and once after each fit configuration, so
+    // its minimum sees the same spread of machine states as the fits' minima.
+    let mut parse = Vec::new();
+    let mut bare = Vec::new();
+    let mut parse_two = Vec::new();
+    let mut time_references = |parse: &mut Vec<Duration>| {
+        let (b, records) = bare_pass(&log, false);
+        assert_eq!(records, rows, "bare pass record count");
+        bare.push(b);
+        parse.push(bare_pass(&log, true).0);
+    };
+    time_references(&mut parse);
 
     let fit_with = |bin: &Path, logs: &[&Path], threads: usize, diagnose: bool| {
         let mut cmd = Command::new(bin);
@@ -87,9 +100,56 @@ fn main() {
         }
         run_measured(cmd)
     };
-    println!();
+    let bins: Vec<(&str, &Path)> = std::iter::once(("", bin.as_path()))
+        .chain(before.as_deref().map(|b| ("before: ", b)))
+        .collect();
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    let runs: [(&str, bool, usize); 4] = [
+        ("(b) fit --no-diagnose --threads 1", false, 1),
+        ("(b) fit --no-diagnose --threads 2", false, 2),
+        ("(c) fit (with diagnosis) --threads 1", true, 1),
+        ("(c) fit (with diagnosis) --threads 2", true, 2),
+    ];
+    // Every configuration `repeat` times, the binaries alternating; the fastest run of each.
+    let mut single: Vec<(String, Measured)> = Vec::new();
+    for (name, diagnose, threads) in runs {
+        let mut best: Vec<Option<Measured>> = vec![None; bins.len()];
+        for _ in 0..repeat {
+            for (k, &(_, b)) in bins.iter().enumerate() {
+                best[k] = Some(fastest(best[k], fit_with(b, &[&log], threads, diagnose)));
+            }
+        }
+        for (&(tag, _), m) in bins.iter().zip(best) {
+            single.push((format!("{tag}{name}"), m.expect("repeat ≥ 1")));
+        }
+        time_references(&mut parse);
+    }
+    let mut two_logs: Vec<(&str, Measured, Measured)> = Vec::new();
+    for &(tag, b) in &bins {
+        let (mut one, mut two) = (None, None);
+        for _ in 0..repeat {
+            one = Some(fastest(one, fit_with(b, &[&log, &second], 1, false)));
+            two = Some(fastest(two, fit_with(b, &[&log, &second], 2, false)));
+        }
+        two_logs.push((tag, one.expect("repeat ≥ 1"), two.expect("repeat ≥ 1")));
+        parse_two.push(bare_pass(&log, true).0 + bare_pass(&second, true).0);
+    }
+
+    let min = |d: &[Duration]| d.iter().copied().min().expect("timed at least once");
+    let spread = |d: &[Duration]| {
+        let secs: Vec<f64> = d.iter().map(Duration::as_secs_f64).collect();
+        let (lo, hi) = secs
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(l, h), &s| (l.min(s), h.max(s)));
+        format!("{lo:.2}–{hi:.2} s over {} passes", secs.len())
+    };
+    let (parse_min, parse_two_min) = (min(&parse), min(&parse_two));
+    println!();
     println!("load average before the fits: {}", load.trim());
+    println!(
+        "each fit: fastest of {repeat} run(s); × (a) against the fastest pass (a), {}",
+        spread(&parse)
+    );
     println!(
         "{:<52} {:>9} {:>10} {:>8} {:>13}",
         "run", "wall, s", "× (a)", "CPU, s", "peak RSS, MB"
@@ -105,52 +165,62 @@ fn main() {
         );
     };
     for (name, t) in [
-        ("bare csv::ByteRecord pass, no parsing", bare),
-        ("(a) csv::ByteRecord pass + std parse of every field", parse),
+        ("bare csv::ByteRecord pass, no parsing", min(&bare)),
+        (
+            "(a) csv::ByteRecord pass + std parse of every field",
+            parse_min,
+        ),
     ] {
-        let ratio = t.as_secs_f64() / parse.as_secs_f64();
+        let ratio = t.as_secs_f64() / parse_min.as_secs_f64();
         let secs = t.as_secs_f64();
         println!(
             "{name:<52} {secs:>9.2} {ratio:>10.2} {:>8} {:>13}",
             "-", "-"
         );
     }
-    let bins: Vec<(&str, &Path)> = std::iter::once(("", bin.as_path()))
-        .chain(before.as_deref().map(|b| ("before: ", b)))
-        .collect();
-    let runs: [(&str, bool, usize); 4] = [
-        ("(b) fit --no-diagnose --threads 1", false, 1),
-        ("(b) fit --no-diagnose --threads 2", false, 2),
-        ("(c) fit (with diagnosis) --threads 1", true, 1),
-        ("(c) fit (with diagnosis) --threads 2", true, 2),
-    ];
-    for (name, diagnose, threads) in runs {
-        for &(tag, b) in &bins {
-            row(
-                &format!("{tag}{name}"),
-                fit_with(b, &[&log], threads, diagnose),
-                parse,
-            );
-        }
+    for (name, m) in single {
+        row(&name, m, parse_min);
     }
-    for &(tag, b) in &bins {
-        let one = fit_with(b, &[&log, &second], 1, false);
-        let two = fit_with(b, &[&log, &second], 2, false);
+    for (tag, one, two) in two_logs {
         row(
             &format!("{tag}two logs, --no-diagnose --threads 1"),
             one,
-            parse_two,
+            parse_two_min,
         );
         row(
             &format!("{tag}two logs, --no-diagnose --threads 2"),
             two,
-            parse_two,
+            parse_two_min,
         );
         println!(
             "{tag}two logs: 1 thread / 2 threads = {:.2}× (× (a) is against both (a) passes, {:.2} s)",
             one.wall.as_secs_f64() / two.wall.as_secs_f64(),
-            parse_two.as_secs_f64()
+            parse_two_min.as_secs_f64()
         );
+    }
+}
+
+/// Runs per configuration: `$MRSYSID_BENCH_REPEAT`, default 3.
+fn repetitions() -> usize {
+    std::env::var("MRSYSID_BENCH_REPEAT")
+        .ok()
+        .map(|r| r.parse().expect("MRSYSID_BENCH_REPEAT: a whole number ≥ 1"))
+        .unwrap_or(3)
+        .max(1)
+}
+
+/// The faster (by wall time) of `best` so far and `m`; peak RSS the larger of the two.
+fn fastest(best: Option<Measured>, m: Measured) -> Measured {
+    match best {
+        Some(b) if b.wall <= m.wall => Measured {
+            rss: b.rss.max(m.rss),
+            ..b
+        },
+        Some(b) => Measured {
+            rss: b.rss.max(m.rss),
+            ..m
+        },
+        None => m,
     }
 }
 
