@@ -62,7 +62,7 @@ pub(crate) fn solve_identifiable(
         // A regressor that is zero in every sample is dropped first, with its cause: it
         // is not "aliased" with the other zero columns, it carries nothing.
         kept.retain(|&j| {
-            let zero = x.col(j).norm_l2() == 0.0;
+            let zero = x.col(j).iter().all(|&v| v == 0.0);
             if zero {
                 dropped.push(DroppedTerm {
                     name: names[j].clone(),
