@@ -358,6 +358,12 @@ impl Accumulator {
         f * self.r[u * self.rows() + i]
     }
 
+    /// The column shape of augmented column j: columns of one shape are constant
+    /// multiples of each other, here and in every statistic derived from this one.
+    pub(crate) fn shape_of(&self, j: usize) -> usize {
+        self.shape[j].0
+    }
+
     /// Factor column of augmented column j (`rows()` values).
     pub fn r_column(&self, j: usize) -> Vec<f64> {
         let (u, f) = self.shape[j];

@@ -521,3 +521,61 @@ fn selected_columns_equal_accumulating_the_smaller_structure() {
         }
     }
 }
+
+/// A parameter untied on one axis (its own parameter for a column the shared one
+/// already has there, as the diagnosis's candidates do) makes that axis' OLS design
+/// exactly singular: both columns are one column shape of the statistics. With `Drop`
+/// the later column is dropped before any SVD, aliased with the earlier (condition
+/// number infinite), and the OLS equals the one without it (noisy data: SSE to 1e-12
+/// relative, rounding only); with `Refuse` the fit fails naming both terms.
+#[test]
+fn a_column_of_the_same_shape_on_one_axis_is_dropped_as_aliased() {
+    let (base, _, samples) = noisy(15, 2000);
+    let mx = base
+        .columns
+        .iter()
+        .position(|c| c.axis == Axis::Mx && c.terms.len() == 1)
+        .expect("a single-term Mx column");
+    let shared = base.params[base.columns[mx].param].name.clone();
+    let mut untied = base.clone();
+    untied.add_parameter(
+        mrsysid::model::Parameter {
+            name: format!("{shared}@Mx"),
+            unit: base.params[base.columns[mx].param].unit.clone(),
+        },
+        vec![base.columns[mx].clone()],
+    );
+    let data = chunks(&samples, 4, 1024);
+    let (acc_base, acc_untied) = (accumulate(&base, &data), accumulate(&untied, &data));
+    let f0 = fit(&base, &acc_base, &FitOptions::default()).unwrap();
+    let f1 = fit(&untied, &acc_untied, &FitOptions::default()).unwrap();
+    let ols_mx = &f1.identifiability[Axis::Mx as usize];
+    let label = &base.columns[mx].label;
+    assert_eq!(ols_mx.dropped.len(), 1, "{ols_mx:?}");
+    let d = &ols_mx.dropped[0];
+    assert_eq!(d.name, format!("{shared}@Mx ({label})"));
+    assert_eq!(d.aliased_with, vec![format!("{shared} ({label})")]);
+    assert_eq!(
+        (d.cause.as_deref(), d.condition_number),
+        (None, f64::INFINITY)
+    );
+    let (sse0, sse1) = (f0.axes[3].ols.sse, f1.axes[3].ols.sse);
+    assert!((sse1 / sse0 - 1.0).abs() < 1e-12, "{sse0:e} {sse1:e}");
+    assert_eq!(f1.axes[3].ols.columns, f0.axes[3].ols.columns);
+    let refuse = FitOptions {
+        unidentifiable: UnidentifiablePolicy::Refuse,
+        ..FitOptions::default()
+    };
+    match fit(&untied, &acc_untied, &refuse) {
+        Err(EstimateError::Unidentifiable {
+            problem,
+            parameters,
+            ..
+        }) => {
+            assert_eq!(problem, "OLS Mx");
+            assert!(parameters.contains(&format!("{shared}@Mx ({label})")));
+            assert!(parameters.contains(&format!("{shared} ({label})")));
+        }
+        other => panic!("expected refusal, got {other:?}"),
+    }
+}

@@ -41,21 +41,45 @@ pub struct DroppedTerm {
     pub condition_number: f64,
 }
 
-/// Solves min ‖X θ − z‖ over the columns of `x` named `names`. When the equilibrated
-/// design is numerically singular, either refuses (error naming the involved terms) or
-/// drops the term with the largest weight in the weakest direction and retries, per
-/// `options`. A term dropped alone (its column is zero) gets `zero_cause(column)` as its
-/// cause. Returns the solution, the indices of the kept columns and the report (its
-/// condition number NaN when `singular_values` let the solve skip them).
+/// What [`solve_identifiable`] knows of the columns of a design besides their data.
+pub(crate) struct DesignTerms<'a> {
+    /// Name of each column.
+    pub names: Vec<String>,
+    /// For each column, the first column it is a constant multiple of in the statistics
+    /// (the same column shape of the accumulator), if any: the two can never be separated.
+    pub multiple_of: Vec<Option<usize>>,
+    /// Why column j is zero in every sample.
+    pub zero_cause: &'a dyn Fn(usize) -> String,
+}
+
+impl<'a> DesignTerms<'a> {
+    /// Terms `names`, none a multiple of another.
+    pub fn distinct(names: Vec<String>, zero_cause: &'a dyn Fn(usize) -> String) -> Self {
+        let multiple_of = vec![None; names.len()];
+        Self {
+            names,
+            multiple_of,
+            zero_cause,
+        }
+    }
+}
+
+/// Solves min ‖X θ − z‖ over the columns of `x` (described by `terms`). When the
+/// equilibrated design is numerically singular, either refuses (error naming the involved
+/// terms) or drops the term with the largest weight in the weakest direction and retries,
+/// per `options`. When dropping, a term whose column is zero goes first, with its cause,
+/// then a term that is a multiple of an earlier one, aliased with it (condition number
+/// infinite, no SVD needed). Returns the solution, the indices of the kept columns and
+/// the report (its condition number NaN when `singular_values` let the solve skip them).
 pub(crate) fn solve_identifiable(
     problem: &str,
     x: &Mat<f64>,
     z: &[f64],
-    names: &[String],
+    terms: &DesignTerms,
     options: &FitOptions,
     singular_values: SingularValues,
-    zero_cause: &dyn Fn(usize) -> String,
 ) -> Result<(LeastSquares, Vec<usize>, ProblemConditioning), EstimateError> {
+    let names = &terms.names;
     let mut kept: Vec<usize> = (0..x.ncols()).collect();
     let mut dropped = Vec::new();
     if options.unidentifiable == UnidentifiablePolicy::Drop {
@@ -67,11 +91,24 @@ pub(crate) fn solve_identifiable(
                 dropped.push(DroppedTerm {
                     name: names[j].clone(),
                     aliased_with: Vec::new(),
-                    cause: Some(zero_cause(j)),
+                    cause: Some((terms.zero_cause)(j)),
                     condition_number: f64::INFINITY,
                 });
             }
             !zero
+        });
+        // A column of a zero shape went with the zero columns above.
+        kept.retain(|&j| {
+            let Some(first) = terms.multiple_of[j] else {
+                return true;
+            };
+            dropped.push(DroppedTerm {
+                name: names[j].clone(),
+                aliased_with: vec![names[first].clone()],
+                cause: None,
+                condition_number: f64::INFINITY,
+            });
+            false
         });
     }
     loop {
@@ -125,7 +162,9 @@ pub(crate) fn solve_identifiable(
                 let name = names[kept[worst]].clone();
                 let aliased_with: Vec<String> =
                     involved.into_iter().filter(|n| *n != name).collect();
-                let cause = aliased_with.is_empty().then(|| zero_cause(kept[worst]));
+                let cause = aliased_with
+                    .is_empty()
+                    .then(|| (terms.zero_cause)(kept[worst]));
                 dropped.push(DroppedTerm {
                     name,
                     aliased_with,

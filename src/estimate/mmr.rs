@@ -12,7 +12,9 @@
 
 use faer::Mat;
 
-use super::identifiability::{ProblemConditioning, solve_identifiable, zero_column_cause};
+use super::identifiability::{
+    DesignTerms, ProblemConditioning, solve_identifiable, zero_column_cause,
+};
 use super::lstsq::{LeastSquares, SingularValues};
 use super::{EstimateError, FitOptions};
 use crate::model::ModelStructure;
@@ -114,8 +116,9 @@ pub(crate) fn solve(
             .collect();
         zero_column_cause(structure, acc, &cols)
     };
+    let terms = DesignTerms::distinct(names, &cause);
     let (ls, params, conditioning) =
-        solve_identifiable("MMR", &g, &rhs, &names, options, singular_values, &cause)?;
+        solve_identifiable("MMR", &g, &rhs, &terms, options, singular_values)?;
     Ok(MmrSolution {
         ls,
         params,

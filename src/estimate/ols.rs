@@ -5,7 +5,9 @@
 use faer::Mat;
 use serde::Serialize;
 
-use super::identifiability::{ProblemConditioning, solve_identifiable, zero_column_cause};
+use super::identifiability::{
+    DesignTerms, ProblemConditioning, solve_identifiable, zero_column_cause,
+};
 use super::lstsq::SingularValues;
 use super::{EstimateError, FitOptions};
 use crate::model::ModelStructure;
@@ -93,15 +95,22 @@ pub(crate) fn axis_ols_with(
     }
     let (x, z) = compressed(acc, &cols, axis);
     let cause = |j: usize| zero_column_cause(structure, acc, &[cols[j]]);
+    let terms = DesignTerms {
+        multiple_of: (0..cols.len())
+            .map(|j| (0..j).find(|&i| acc.shape_of(cols[i]) == acc.shape_of(cols[j])))
+            .collect(),
+        names,
+        zero_cause: &cause,
+    };
     let (ls, kept, report) = solve_identifiable(
         &format!("OLS {axis}"),
         &x,
         &z,
-        &names,
+        &terms,
         options,
         singular_values,
-        &cause,
     )?;
+    let names = terms.names;
     let k = kept.len();
     let dof = n - k as f64;
     let residual_variance = ls.sse / dof;
