@@ -579,3 +579,56 @@ fn a_column_of_the_same_shape_on_one_axis_is_dropped_as_aliased() {
         other => panic!("expected refusal, got {other:?}"),
     }
 }
+
+/// A parameter whose M_x column is a combination of the terms of two single-term M_x
+/// columns (as a centre-of-gravity offset h × the F_y model lies beside the h × F_y terms
+/// of M_x) is in their span by construction: with `Drop` it is dropped before any SVD,
+/// aliased with exactly those two terms, and the M_x OLS equals the one without it.
+#[test]
+fn a_column_spanned_by_the_terms_of_others_on_one_axis_is_dropped_as_aliased() {
+    let (base, _, samples) = noisy(16, 2000);
+    let singles: Vec<usize> = (0..base.columns.len())
+        .filter(|&c| base.columns[c].axis == Axis::Mx && base.columns[c].terms.len() == 1)
+        .take(2)
+        .collect();
+    assert_eq!(singles.len(), 2, "two single-term Mx columns");
+    let mut terms = Vec::new();
+    for (&c, coef) in singles.iter().zip([0.3, -1.7]) {
+        let mut t = base.columns[c].terms[0].clone();
+        t.coef *= coef;
+        terms.push(t);
+    }
+    let mut offset = base.clone();
+    let column = mrsysid::model::Column {
+        axis: Axis::Mx,
+        param: 0,
+        label: "offset".into(),
+        terms,
+    };
+    let param = mrsysid::model::Parameter {
+        name: "dz".into(),
+        unit: "m".into(),
+    };
+    offset.add_parameter(param, vec![column]);
+    let data = chunks(&samples, 4, 1024);
+    let f0 = fit(&base, &accumulate(&base, &data), &FitOptions::default()).unwrap();
+    let f1 = fit(&offset, &accumulate(&offset, &data), &FitOptions::default()).unwrap();
+    let ols_mx = &f1.identifiability[Axis::Mx as usize];
+    assert_eq!(ols_mx.dropped.len(), 1, "{ols_mx:?}");
+    let d = &ols_mx.dropped[0];
+    assert_eq!(d.name, "dz (offset)");
+    let name = |c: usize| {
+        let col = &base.columns[c];
+        format!("{} ({})", base.params[col.param].name, col.label)
+    };
+    assert_eq!(
+        d.aliased_with,
+        singles.iter().map(|&c| name(c)).collect::<Vec<_>>()
+    );
+    assert_eq!(
+        (d.cause.as_deref(), d.condition_number),
+        (None, f64::INFINITY)
+    );
+    let (sse0, sse1) = (f0.axes[3].ols.sse, f1.axes[3].ols.sse);
+    assert!((sse1 / sse0 - 1.0).abs() < 1e-12, "{sse0:e} {sse1:e}");
+}

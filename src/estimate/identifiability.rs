@@ -45,20 +45,21 @@ pub struct DroppedTerm {
 pub(crate) struct DesignTerms<'a> {
     /// Name of each column.
     pub names: Vec<String>,
-    /// For each column, the first column it is a constant multiple of in the statistics
-    /// (the same column shape of the accumulator), if any: the two can never be separated.
-    pub multiple_of: Vec<Option<usize>>,
+    /// For each column, other columns whose span holds it by construction (empty when
+    /// none): the first column of its shape in the statistics, or columns whose terms
+    /// are its terms one by one. It can never be separated from them.
+    pub spanned_by: Vec<Vec<usize>>,
     /// Why column j is zero in every sample.
     pub zero_cause: &'a dyn Fn(usize) -> String,
 }
 
 impl<'a> DesignTerms<'a> {
-    /// Terms `names`, none a multiple of another.
+    /// Terms `names`, none known to lie in the span of others.
     pub fn distinct(names: Vec<String>, zero_cause: &'a dyn Fn(usize) -> String) -> Self {
-        let multiple_of = vec![None; names.len()];
+        let spanned_by = vec![Vec::new(); names.len()];
         Self {
             names,
-            multiple_of,
+            spanned_by,
             zero_cause,
         }
     }
@@ -68,8 +69,8 @@ impl<'a> DesignTerms<'a> {
 /// equilibrated design is numerically singular, either refuses (error naming the involved
 /// terms) or drops the term with the largest weight in the weakest direction and retries,
 /// per `options`. When dropping, a term whose column is zero goes first, with its cause,
-/// then a term that is a multiple of an earlier one, aliased with it (condition number
-/// infinite, no SVD needed). Returns the solution, the indices of the kept columns and
+/// then a term in the span of others by construction, aliased with them (condition
+/// number infinite, no SVD needed). Returns the solution, the indices of the kept columns and
 /// the report (its condition number NaN when `singular_values` let the solve skip them).
 pub(crate) fn solve_identifiable(
     problem: &str,
@@ -97,19 +98,26 @@ pub(crate) fn solve_identifiable(
             }
             !zero
         });
-        // A column of a zero shape went with the zero columns above.
-        kept.retain(|&j| {
-            let Some(first) = terms.multiple_of[j] else {
-                return true;
-            };
+        // Zero columns dropped above are left out of a span: the rest still spans the
+        // column (and a column spanned by zero columns alone is zero: dropped above).
+        let is_kept = |j: usize, kept: &[usize]| kept.binary_search(&j).is_ok();
+        for j in kept.clone() {
+            let span: Vec<usize> = terms.spanned_by[j]
+                .iter()
+                .copied()
+                .filter(|&i| is_kept(i, &kept))
+                .collect();
+            if span.is_empty() {
+                continue;
+            }
             dropped.push(DroppedTerm {
                 name: names[j].clone(),
-                aliased_with: vec![names[first].clone()],
+                aliased_with: span.iter().map(|&i| names[i].clone()).collect(),
                 cause: None,
                 condition_number: f64::INFINITY,
             });
-            false
-        });
+            kept.retain(|&i| i != j);
+        }
     }
     loop {
         if kept.is_empty() {

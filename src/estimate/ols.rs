@@ -59,6 +59,38 @@ pub(crate) fn term_name(structure: &ModelStructure, column: usize) -> String {
     format!("{} ({})", structure.params[c.param].name, c.label)
 }
 
+/// For each of the columns `cols` (one axis), the others that span it by construction:
+/// the first earlier column of its shape in `acc` (a twin, e.g. a parameter untied on
+/// this axis), or, for a column of several terms, single-term columns with each of its
+/// terms' factors (e.g. a centre-of-gravity offset h × the F_y model beside the h × F_y
+/// terms of M_x). A column that spans others is never itself spanned, so they cannot all
+/// be dropped.
+fn spanned_by(structure: &ModelStructure, acc: &Accumulator, cols: &[usize]) -> Vec<Vec<usize>> {
+    let twin = |j: usize| (0..j).find(|&i| acc.shape_of(cols[i]) == acc.shape_of(cols[j]));
+    let terms = |j: usize| &structure.columns[cols[j]].terms;
+    let single = |i: usize| twin(i).is_none() && terms(i).len() == 1;
+    (0..cols.len())
+        .map(|j| {
+            if let Some(i) = twin(j) {
+                return vec![i];
+            }
+            if terms(j).len() < 2 {
+                return Vec::new();
+            }
+            let basis = |t: &crate::model::Term| {
+                (0..cols.len()).find(|&i| i != j && single(i) && terms(i)[0].factors == t.factors)
+            };
+            let mut span: Vec<usize> = match terms(j).iter().map(basis).collect() {
+                Some(span) => span,
+                None => return Vec::new(),
+            };
+            span.sort_unstable();
+            span.dedup();
+            span
+        })
+        .collect()
+}
+
 /// The compressed design F[:, cols] (q × k) and target F[:, z_axis] of a column subset.
 pub(crate) fn compressed(acc: &Accumulator, cols: &[usize], axis: Axis) -> (Mat<f64>, Vec<f64>) {
     let x = Mat::from_fn(acc.rows(), cols.len(), |i, j| acc.r(i, cols[j]));
@@ -96,9 +128,7 @@ pub(crate) fn axis_ols_with(
     let (x, z) = compressed(acc, &cols, axis);
     let cause = |j: usize| zero_column_cause(structure, acc, &[cols[j]]);
     let terms = DesignTerms {
-        multiple_of: (0..cols.len())
-            .map(|j| (0..j).find(|&i| acc.shape_of(cols[i]) == acc.shape_of(cols[j])))
-            .collect(),
+        spanned_by: spanned_by(structure, acc, &cols),
         names,
         zero_cause: &cause,
     };
