@@ -136,8 +136,14 @@ pub(crate) fn solve_identifiable(
             };
             return Ok((ls, kept, report));
         }
-        let sub = Mat::from_fn(x.nrows(), kept.len(), |i, j| x[(i, kept[j])]);
-        match lstsq::solve(&sub, z, options.rank_tol, singular_values) {
+        let sub;
+        let design = if kept.len() == x.ncols() {
+            x
+        } else {
+            sub = Mat::from_fn(x.nrows(), kept.len(), |i, j| x[(i, kept[j])]);
+            &sub
+        };
+        match lstsq::solve(design, z, options.rank_tol, singular_values) {
             Ok(ls) => {
                 let report = ProblemConditioning {
                     problem: problem.into(),

@@ -248,9 +248,13 @@ fn conditioning_with(r11: &Mat<f64>, with_vectors: bool, vif: Vec<f64>) -> Condi
 /// The upper-triangular factor R (non-negative diagonal) of a Householder QR of `a`
 /// (rows ≥ columns), on this thread.
 fn triangular_factor(mut a: Mat<f64>) -> Mat<f64> {
+    thread_local! {
+        static SCRATCH: std::cell::RefCell<FoldScratch> =
+            const { std::cell::RefCell::new(FoldScratch::new()) };
+    }
     let n = a.ncols();
     let mut r = Mat::zeros(n, n);
-    fold_rows(r.as_mut(), a.as_mut(), &mut FoldScratch::new());
+    SCRATCH.with_borrow_mut(|s| fold_rows(r.as_mut(), a.as_mut(), s));
     r
 }
 
@@ -290,26 +294,28 @@ fn singular_value_decomposition(
 
 /// x solving U x = b for upper-triangular U.
 fn back_substitute(u: &Mat<f64>, b: &[f64]) -> Vec<f64> {
-    let k = b.len();
     let mut x = b.to_vec();
+    back_substitute_in_place(u, &mut x);
+    x
+}
+
+/// Overwrites b with x solving U x = b for upper-triangular U.
+fn back_substitute_in_place(u: &Mat<f64>, x: &mut [f64]) {
+    let k = x.len();
     for i in (0..k).rev() {
         let s: f64 = ((i + 1)..k).map(|j| u[(i, j)] * x[j]).sum();
         x[i] = (x[i] - s) / u[(i, i)];
     }
-    x
 }
 
-/// U⁻¹ for upper-triangular U (upper triangular).
+/// U⁻¹ for upper-triangular U (upper triangular), column j solving U x = eⱼ.
 fn upper_inverse(u: &Mat<f64>) -> Mat<f64> {
     let k = u.ncols();
     let mut inv = Mat::<f64>::zeros(k, k);
     for j in 0..k {
-        let mut e = vec![0.0; k];
-        e[j] = 1.0;
-        let col = back_substitute(u, &e);
-        for i in 0..k {
-            inv[(i, j)] = col[i];
-        }
+        let col = inv.col_as_slice_mut(j);
+        col[j] = 1.0;
+        back_substitute_in_place(u, col);
     }
     inv
 }
