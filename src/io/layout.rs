@@ -9,68 +9,71 @@
 
 use serde::Serialize;
 
-/// Running normal equations of a small least-squares problem y ≈ X β.
+/// Running normal equations of small least-squares problems y_k ≈ X β_k that share
+/// their regressors: XᵀX is summed once for all outputs y_k, and a problem may use the
+/// leading columns of X only (its XᵀX is the leading block, the same sums).
 #[derive(Debug, Clone)]
 pub struct NormalEquations {
     n: usize,
     xtx: Vec<f64>,
+    /// Xᵀy_k at `k * n`.
     xty: Vec<f64>,
-    yty: f64,
-    sum_y: f64,
+    yty: Vec<f64>,
+    sum_y: Vec<f64>,
     count: u64,
 }
 
 impl NormalEquations {
-    /// Empty accumulator for `n` regressors.
-    pub fn new(n: usize) -> Self {
+    /// Empty accumulator for `n` regressors and `outputs` outputs.
+    pub fn new(n: usize, outputs: usize) -> Self {
         Self {
             n,
             xtx: vec![0.0; n * n],
-            xty: vec![0.0; n],
-            yty: 0.0,
-            sum_y: 0.0,
+            xty: vec![0.0; n * outputs],
+            yty: vec![0.0; outputs],
+            sum_y: vec![0.0; outputs],
             count: 0,
         }
     }
 
-    /// Adds one observation.
-    pub fn push(&mut self, x: &[f64], y: f64) {
+    /// Adds one observation: regressors `x` (at least n) and one value per output.
+    pub fn push(&mut self, x: &[f64], y: &[f64]) {
         let n = self.n;
         let x = &x[..n];
-        for (r, (&xr, xty)) in x.iter().zip(&mut self.xty).enumerate() {
+        for (r, &xr) in x.iter().enumerate() {
             let upper = &mut self.xtx[r * n + r..(r + 1) * n];
             for (dst, &xc) in upper.iter_mut().zip(&x[r..]) {
                 *dst += xr * xc;
             }
-            *xty += xr * y;
         }
-        self.yty += y * y;
-        self.sum_y += y;
+        for (k, &yk) in y.iter().enumerate() {
+            for (xty, &xr) in self.xty[k * n..(k + 1) * n].iter_mut().zip(x) {
+                *xty += xr * yk;
+            }
+            self.yty[k] += yk * yk;
+            self.sum_y[k] += yk;
+        }
         self.count += 1;
     }
 
-    /// Least-squares coefficients (columns equilibrated) and R² about the mean; `None`
-    /// when singular or empty.
-    pub fn solve(&self) -> Option<(Vec<f64>, f64)> {
-        let n = self.n;
+    /// Least-squares coefficients (columns equilibrated) of output `output` on the first
+    /// `columns` regressors, and R² about the mean; `None` when singular or empty.
+    pub fn solve(&self, output: usize, columns: usize) -> Option<(Vec<f64>, f64)> {
+        let (stride, n) = (self.n, columns.min(self.n));
         if self.count <= n as u64 {
             return None;
         }
-        let scale: Vec<f64> = (0..n)
-            .map(|i| self.xtx[i * n + i].sqrt().max(1e-300))
-            .collect();
+        let xtx = |r: usize, c: usize| self.xtx[r * stride + c];
+        let xty = &self.xty[output * stride..output * stride + n];
+        let scale: Vec<f64> = (0..n).map(|i| xtx(i, i).sqrt().max(1e-300)).collect();
         let mut a = vec![0.0; n * n];
         for r in 0..n {
             for c in 0..n {
-                let v = if c >= r {
-                    self.xtx[r * n + c]
-                } else {
-                    self.xtx[c * n + r]
-                };
+                let v = if c >= r { xtx(r, c) } else { xtx(c, r) };
                 a[r * n + c] = v / (scale[r] * scale[c]);
             }
         }
-        let mut b: Vec<f64> = (0..n).map(|i| self.xty[i] / scale[i]).collect();
+        let mut b: Vec<f64> = (0..n).map(|i| xty[i] / scale[i]).collect();
         // Cholesky solve of the equilibrated system.
         for j in 0..n {
             let mut d = a[j * n + j];
@@ -105,10 +108,11 @@ impl NormalEquations {
             b[i] = s / a[i * n + i];
         }
         let beta: Vec<f64> = (0..n).map(|i| b[i] / scale[i]).collect();
-        let explained: f64 = beta.iter().zip(&self.xty).map(|(b, xy)| b * xy).sum();
-        let sse = (self.yty - explained).max(0.0);
-        let mean = self.sum_y / self.count as f64;
-        let sst = self.yty - self.count as f64 * mean * mean;
+        let explained: f64 = beta.iter().zip(xty).map(|(b, xy)| b * xy).sum();
+        let yty = self.yty[output];
+        let sse = (yty - explained).max(0.0);
+        let mean = self.sum_y[output] / self.count as f64;
+        let sst = yty - self.count as f64 * mean * mean;
         let r2 = if sst > 0.0 { 1.0 - sse / sst } else { 0.0 };
         Some((beta, r2))
     }
@@ -138,9 +142,8 @@ pub struct LayoutReport {
 pub struct LayoutAccumulator {
     rotors: usize,
     with_omega_dot: bool,
-    mx: NormalEquations,
-    my: NormalEquations,
-    mz: NormalEquations,
+    /// M_x, M_y on [1, Ω_i²] and M_z on [1, Ω_i², Ω̇_i] (the leading columns are shared).
+    moments: NormalEquations,
     fz: NormalEquations,
     x: Vec<f64>,
 }
@@ -152,10 +155,8 @@ impl LayoutAccumulator {
         Self {
             rotors,
             with_omega_dot,
-            mx: NormalEquations::new(rotors + 1),
-            my: NormalEquations::new(rotors + 1),
-            mz: NormalEquations::new(nz),
-            fz: NormalEquations::new(1),
+            moments: NormalEquations::new(nz, 3),
+            fz: NormalEquations::new(1, 1),
             x: vec![0.0; nz],
         }
     }
@@ -170,26 +171,24 @@ impl LayoutAccumulator {
             *dst = w * w;
             sum_sq += *dst;
         }
-        self.mx.push(&self.x[..=n], wrench[3]);
-        self.my.push(&self.x[..=n], wrench[4]);
         if self.with_omega_dot {
             self.x[1 + n..1 + 2 * n].copy_from_slice(&omega_dot[..n]);
         }
-        self.mz.push(&self.x, wrench[5]);
-        self.fz.push(&[sum_sq], wrench[2]);
+        self.moments.push(&self.x, &wrench[3..6]);
+        self.fz.push(&[sum_sq], &[wrench[2]]);
     }
 
     /// The inferred layout, `None` when a regression is singular (e.g. constant speeds).
     pub fn finish(&self) -> Option<LayoutReport> {
         let n = self.rotors;
-        let (kfz, r2f) = self.fz.solve()?;
+        let (kfz, r2f) = self.fz.solve(0, 1)?;
         let k = -kfz[0];
         if k <= 0.0 {
             return None;
         }
-        let (a, r2x) = self.mx.solve()?;
-        let (b, r2y) = self.my.solve()?;
-        let (c, r2z) = self.mz.solve()?;
+        let (a, r2x) = self.moments.solve(0, n + 1)?;
+        let (b, r2y) = self.moments.solve(1, n + 1)?;
+        let (c, r2z) = self.moments.solve(2, self.x.len())?;
         let positions: Vec<[f64; 2]> = (0..n).map(|i| [b[1 + i] / k, -a[1 + i] / k]).collect();
         let spins: Vec<f64> = (0..n)
             .map(|i| if c[1 + i] > 0.0 { -1.0 } else { 1.0 })
@@ -207,5 +206,46 @@ impl LayoutAccumulator {
             rotor_inertia,
             r_squared: [r2x, r2y, r2z, r2f],
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sharing XᵀX between outputs, and solving on its leading columns, gives what a
+    /// separate accumulator of those columns alone gives, bit for bit: the same products
+    /// summed in the same order.
+    #[test]
+    fn shared_normal_equations_solve_as_separate_ones() {
+        let (n, lead, samples) = (9, 5, 400);
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut shared = NormalEquations::new(n, 2);
+        let mut short = NormalEquations::new(lead, 1);
+        let mut full = NormalEquations::new(n, 1);
+        for _ in 0..samples {
+            let x: Vec<f64> = (0..n).map(|_| rnd()).collect();
+            let y = [rnd(), rnd()];
+            shared.push(&x, &y);
+            short.push(&x[..lead], &y[..1]);
+            full.push(&x, &y[1..]);
+        }
+        let bits = |r: Option<(Vec<f64>, f64)>| {
+            let (beta, r2) = r.expect("regular");
+            (
+                beta.iter().map(|b| b.to_bits()).collect::<Vec<_>>(),
+                r2.to_bits(),
+            )
+        };
+        assert_eq!(bits(shared.solve(0, lead)), bits(short.solve(0, lead)));
+        assert_eq!(bits(shared.solve(1, n)), bits(full.solve(0, n)));
+        // Fewer samples than regressors: no solution.
+        assert!(NormalEquations::new(3, 1).solve(0, 3).is_none());
     }
 }
