@@ -408,6 +408,23 @@ fn scaled_error(theta: &[f64], reference: &[f64], scales: &[f64]) -> f64 {
     (num / den).sqrt()
 }
 
+/// The problem and parameters named when fitting with the `Refuse` policy fails (panics
+/// when it does not).
+fn refusal(structure: &mrsysid::model::ModelStructure, acc: &Accumulator) -> (String, Vec<String>) {
+    let refuse = FitOptions {
+        unidentifiable: UnidentifiablePolicy::Refuse,
+        ..FitOptions::default()
+    };
+    match fit(structure, acc, &refuse) {
+        Err(EstimateError::Unidentifiable {
+            problem,
+            parameters,
+            ..
+        }) => (problem, parameters),
+        other => panic!("expected refusal, got {other:?}"),
+    }
+}
+
 /// Pure vertical flight (u = v = 0, so V_h = 0): every F_x and F_y column is zero and
 /// the V_h terms vanish. With `Refuse` the fit fails naming the terms; with `Drop` the
 /// terms are dropped explicitly, listed, and no estimate is printed for them, while the
@@ -424,22 +441,10 @@ fn unidentifiable_parameters_are_refused_or_dropped() {
     }
     set_outputs(&s, &theta, &mut samples, None);
     let acc = accumulate(&s, &chunks(&samples, 4, 1024));
-    let refuse = FitOptions {
-        unidentifiable: UnidentifiablePolicy::Refuse,
-        ..FitOptions::default()
-    };
-    match fit(&s, &acc, &refuse) {
-        Err(EstimateError::Unidentifiable {
-            problem,
-            parameters,
-            ..
-        }) => {
-            assert_eq!(problem, "OLS Fx");
-            assert_eq!(parameters.len(), 4, "{parameters:?}");
-            assert!(parameters.iter().any(|p| p.starts_with("C_H_mub_mu0")));
-        }
-        other => panic!("expected refusal, got {other:?}"),
-    }
+    let (problem, parameters) = refusal(&s, &acc);
+    assert_eq!(problem, "OLS Fx");
+    assert_eq!(parameters.len(), 4, "{parameters:?}");
+    assert!(parameters.iter().any(|p| p.starts_with("C_H_mub_mu0")));
     let f = fit(&s, &acc, &FitOptions::default()).unwrap();
     assert!(f.axes[0].ols.columns.is_empty() && f.axes[1].ols.columns.is_empty());
     let mmr = f.identifiability.last().unwrap();
@@ -559,25 +564,19 @@ fn a_column_of_the_same_shape_on_one_axis_is_dropped_as_aliased() {
         (d.cause.as_deref(), d.condition_number),
         (None, f64::INFINITY)
     );
-    let (sse0, sse1) = (f0.axes[3].ols.sse, f1.axes[3].ols.sse);
+    let (sse0, sse1) = (
+        f0.axes[Axis::Mx as usize].ols.sse,
+        f1.axes[Axis::Mx as usize].ols.sse,
+    );
     assert!((sse1 / sse0 - 1.0).abs() < 1e-12, "{sse0:e} {sse1:e}");
-    assert_eq!(f1.axes[3].ols.columns, f0.axes[3].ols.columns);
-    let refuse = FitOptions {
-        unidentifiable: UnidentifiablePolicy::Refuse,
-        ..FitOptions::default()
-    };
-    match fit(&untied, &acc_untied, &refuse) {
-        Err(EstimateError::Unidentifiable {
-            problem,
-            parameters,
-            ..
-        }) => {
-            assert_eq!(problem, "OLS Mx");
-            assert!(parameters.contains(&format!("{shared}@Mx ({label})")));
-            assert!(parameters.contains(&format!("{shared} ({label})")));
-        }
-        other => panic!("expected refusal, got {other:?}"),
-    }
+    assert_eq!(
+        f1.axes[Axis::Mx as usize].ols.columns,
+        f0.axes[Axis::Mx as usize].ols.columns
+    );
+    let (problem, parameters) = refusal(&untied, &acc_untied);
+    assert_eq!(problem, "OLS Mx");
+    assert!(parameters.contains(&format!("{shared}@Mx ({label})")));
+    assert!(parameters.contains(&format!("{shared} ({label})")));
 }
 
 /// A parameter whose M_x column is a combination of the terms of two single-term M_x
@@ -629,6 +628,9 @@ fn a_column_spanned_by_the_terms_of_others_on_one_axis_is_dropped_as_aliased() {
         (d.cause.as_deref(), d.condition_number),
         (None, f64::INFINITY)
     );
-    let (sse0, sse1) = (f0.axes[3].ols.sse, f1.axes[3].ols.sse);
+    let (sse0, sse1) = (
+        f0.axes[Axis::Mx as usize].ols.sse,
+        f1.axes[Axis::Mx as usize].ols.sse,
+    );
     assert!((sse1 / sse0 - 1.0).abs() < 1e-12, "{sse0:e} {sse1:e}");
 }

@@ -293,10 +293,12 @@ impl ResidualPass {
     fn rows(&self, ws: &Workspace) -> Rows {
         let n = ws.len();
         let p = self.p;
-        let all_columns: Vec<usize> = (0..p).collect();
-        let x = row_major(ws, &all_columns);
+        let x = row_major(ws, p);
+        let shapes = x
+            .chunks_exact(p)
+            .flat_map(|row| self.representatives.iter().map(|&c| row[c]));
         let mut rows = Rows {
-            x: row_major(ws, &self.representatives),
+            x: shapes.collect(),
             v: vec![0.0; n * VW],
         };
         for (a, &axis) in Axis::ALL.iter().enumerate() {
@@ -623,16 +625,16 @@ fn quadratic_diagonal(b: &[f64], m: &[f64], k: usize, d: usize) -> f64 {
     var
 }
 
-/// The columns `columns` of the chunk assembled in `ws` as row-major rows.
-fn row_major(ws: &Workspace, columns: &[usize]) -> Vec<f64> {
-    let (n, w) = (ws.len(), columns.len());
+/// The first `w` columns of the chunk assembled in `ws` as row-major rows.
+fn row_major(ws: &Workspace, w: usize) -> Vec<f64> {
+    let n = ws.len();
     let mut rows = vec![0.0; n * w];
     // Transposed in blocks of samples, so the rows written stay in L1.
     const BLOCK: usize = 16;
     for t0 in (0..n).step_by(BLOCK) {
         let t1 = (t0 + BLOCK).min(n);
-        for (c, &col) in columns.iter().enumerate() {
-            for (t, &x) in (t0..t1).zip(&ws.column(col)[t0..t1]) {
+        for c in 0..w {
+            for (t, &x) in (t0..t1).zip(&ws.column(c)[t0..t1]) {
                 rows[t * w + c] = x;
             }
         }
