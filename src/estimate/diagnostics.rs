@@ -176,6 +176,8 @@ pub struct ResidualPass {
     lag_xx: Vec<f64>,
     /// (L+1) × 12 × 12: Σ_t v_t v_{t+k}ᵀ over MMR and OLS residuals.
     lag_vv: Vec<f64>,
+    /// A chunk's lag products before they are added ([`add_lag_products`]): reused.
+    lag_scratch: Vec<f64>,
     head: Rows,
     tail: Rows,
     hist: Vec<Histogram>,
@@ -251,6 +253,7 @@ impl ResidualPass {
             count: 0,
             lag_xx: vec![0.0; (l + 1) * q * q],
             lag_vv: vec![0.0; (l + 1) * VW * VW],
+            lag_scratch: Vec::new(),
             head: Rows::default(),
             tail: Rows::default(),
             hist,
@@ -294,13 +297,16 @@ impl ResidualPass {
         let n = ws.len();
         let p = self.p;
         let x = row_major(ws, p);
-        let shapes = x
-            .chunks_exact(p)
-            .flat_map(|row| self.representatives.iter().map(|&c| row[c]));
+        let q = self.q();
         let mut rows = Rows {
-            x: shapes.collect(),
+            x: vec![0.0; n * q],
             v: vec![0.0; n * VW],
         };
+        for (shapes, row) in rows.x.chunks_exact_mut(q).zip(x.chunks_exact(p)) {
+            for (dst, &c) in shapes.iter_mut().zip(&self.representatives) {
+                *dst = row[c];
+            }
+        }
         for (a, &axis) in Axis::ALL.iter().enumerate() {
             for (t, &z) in ws.output(axis).iter().enumerate() {
                 rows.v[t * VW + a] = z;
@@ -503,8 +509,9 @@ impl ResidualPass {
     fn add_within(&mut self, rows: &Rows) {
         let n = rows.len();
         let l = self.options.max_lag.min(n.saturating_sub(1));
-        add_lag_products(&rows.x, self.q(), n, l, &mut self.lag_xx);
-        add_lag_products(&rows.v, VW, n, l, &mut self.lag_vv);
+        let (q, scratch) = (self.q(), &mut self.lag_scratch);
+        add_lag_products(&rows.x, q, n, l, &mut self.lag_xx, scratch);
+        add_lag_products(&rows.v, VW, n, l, &mut self.lag_vv, scratch);
     }
 
     /// Lag products between the last rows of a segment (`earlier`) and the first rows of
@@ -585,31 +592,41 @@ fn prediction_coefficients(structure: &ModelStructure, fit: &Fit) -> Mat<f64> {
 /// storage that row is the contiguous slice starting at x_t, so the view shares the
 /// rows' memory (row stride w, overlapping rows) and nothing is copied. The last l rows'
 /// lags, which run past the end, are added as outer products.
-fn add_lag_products(rows: &[f64], w: usize, n: usize, l: usize, dst: &mut [f64]) {
+fn add_lag_products(
+    rows: &[f64],
+    w: usize,
+    n: usize,
+    l: usize,
+    dst: &mut [f64],
+    scratch: &mut Vec<f64>,
+) {
     if n == 0 {
         return;
     }
     let m = n - l;
+    // The chunk's products S, w × (l+1)w column-major in `scratch`: S[i, c] at c w + i.
+    let cols = (l + 1) * w;
+    scratch.resize(w * cols, 0.0);
     let xt = MatRef::from_column_major_slice_with_stride(rows, w, m, w);
-    let shifted = MatRef::from_row_major_slice_with_stride(rows, m, (l + 1) * w, w);
-    let mut s = Mat::<f64>::zeros(w, (l + 1) * w);
-    matmul(s.as_mut(), Accum::Replace, xt, shifted, 1.0, Par::Seq);
+    let shifted = MatRef::from_row_major_slice_with_stride(rows, m, cols, w);
+    let s = MatMut::from_column_major_slice_mut(&mut scratch[..w * cols], w, cols);
+    matmul(s, Accum::Replace, xt, shifted, 1.0, Par::Seq);
     for t in m..n {
         let xs = &rows[t * w..(t + 1) * w];
         for k in 0..n - t {
             let xk = &rows[(t + k) * w..(t + k + 1) * w];
-            for (i, &xi) in xs.iter().enumerate() {
-                for (j, &xj) in xk.iter().enumerate() {
-                    s[(i, k * w + j)] += xi * xj;
-                }
+            for (j, &xj) in xk.iter().enumerate() {
+                let column = &mut scratch[(k * w + j) * w..(k * w + j + 1) * w];
+                column.iter_mut().zip(xs).for_each(|(d, &xi)| *d += xi * xj);
             }
         }
     }
     for (k, block) in dst.chunks_exact_mut(w * w).take(l + 1).enumerate() {
-        for (i, row) in block.chunks_exact_mut(w).enumerate() {
-            row.iter_mut()
-                .enumerate()
-                .for_each(|(j, d)| *d += s[(i, k * w + j)]);
+        for j in 0..w {
+            let column = &scratch[(k * w + j) * w..(k * w + j + 1) * w];
+            for (row, &v) in block.chunks_exact_mut(w).zip(column) {
+                row[j] += v;
+            }
         }
     }
 }
