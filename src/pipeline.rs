@@ -261,7 +261,8 @@ fn parse_threads(share: usize) -> usize {
 /// Feeds the log `source` to `consume` in chunks of [`CHUNK_SAMPLES`] (the last one
 /// shorter) and returns the reader's summary. The chunks do not depend on how the reader
 /// or the caller chunked the samples, so a log gives the same statistics from a file and
-/// from memory. With a `share` of two threads or more, reading a file runs on a thread
+/// from memory: a file's reader cuts them so itself ([`LogReader::join_segments`]), a
+/// log in memory is re-cut ([`Rechunker`]). With a `share` of two threads or more, reading a file runs on a thread
 /// of its own that hands chunks over a bounded channel, so reading overlaps the
 /// consumer's work (memory stays at [`CHUNKS_IN_FLIGHT`] chunks, their buffers reused),
 /// and CSV text is parsed on [`parse_threads`] more.
@@ -277,10 +278,10 @@ fn stream_log(
         count_progress(req, chunk);
         consume(chunk)
     };
-    let mut cut = Rechunker::default();
     let path = match source {
         LogSource::File(path) => path,
         LogSource::Memory(log) => {
+            let mut cut = Rechunker::default();
             for chunk in log.chunks() {
                 cut.push(chunk, &mut feed)?;
             }
@@ -290,10 +291,10 @@ fn stream_log(
     };
     if share < 2 {
         let mut reader = open(path, req, 0)?;
-        while let Some(chunk) = reader.next_chunk() {
-            cut.push(chunk?, &mut feed)?;
+        reader.join_segments();
+        while let Some(chunk) = reader.next_chunk_mut() {
+            feed(chunk?)?;
         }
-        cut.finish(&mut feed)?;
         return Ok(reader.summary().clone());
     }
     let (tx, rx) = std::sync::mpsc::sync_channel(CHUNKS_IN_FLIGHT);
@@ -302,29 +303,21 @@ fn stream_log(
         // The reader is opened on its own thread (it is not `Send`).
         let producer = scope.spawn(move || -> Result<Summary, Error> {
             let mut reader = open(path, req, parse_threads(share))?;
-            // Hands a full chunk over, taking a consumed one back for the next; Err when
-            // the consumer stopped on an error of its own.
-            let mut send = |chunk: &mut SampleChunk| -> Result<(), ()> {
-                let next = reuse.try_recv().unwrap_or_else(|_| empty_like(chunk));
-                tx.send(Ok(std::mem::replace(chunk, next))).map_err(|_| ())
-            };
-            let mut sent = Ok(());
-            while let Some(chunk) = reader.next_chunk() {
-                match chunk {
-                    Ok(c) => sent = cut.push(c, &mut send),
-                    Err(e) => {
-                        // The consumer reports it (or has stopped already).
-                        let _ = tx.send(Err(e));
-                        sent = Err(());
+            reader.join_segments();
+            while let Some(chunk) = reader.next_chunk_mut() {
+                let sent = match chunk {
+                    Ok(c) => {
+                        // Handed over whole, a consumed chunk (or a new one) in its place.
+                        let next = reuse.try_recv().unwrap_or_else(|_| empty_like(c));
+                        tx.send(Ok(std::mem::replace(c, next)))
                     }
-                }
+                    Err(e) => tx.send(Err(e)),
+                };
+                // The consumer stopped on an error of its own, which it reports. (After
+                // a read error the reader is over: the loop ends with it.)
                 if sent.is_err() {
                     break;
                 }
-            }
-            if sent.is_ok() {
-                // Nothing to report if the consumer stopped: it has its own error.
-                let _ = cut.finish(&mut send);
             }
             Ok(reader.summary().clone())
         });
@@ -359,7 +352,7 @@ fn jerk_options(req: &FitRequest) -> DeriveOptions {
         .unwrap_or(req.read.derive)
 }
 
-/// Re-cuts the chunks of one log (across segment boundaries) into chunks of exactly
+/// Re-cuts the chunks of a log in memory (across segment boundaries) into chunks of exactly
 /// [`CHUNK_SAMPLES`] samples, the last one shorter. The factorisation is updated once
 /// per chunk, so fixed chunks make the statistics a function of the sample sequence
 /// alone, bit for bit, whoever produced it; and a log of one-sample segments (a sweep,
@@ -987,10 +980,8 @@ fn pass_log(
                 let seen = [0, 1].map(|k| at.seen[k] + in_log[k]);
                 let start = Start { seen, in_log, ..at };
                 let mut pass = SegmentPass::new(ctx, source, role, start);
-                let mut jerk = JerkScratch::default();
+                // Spilled with its Ω̈ (derived in the first pass).
                 spill.stream_segment(s, |chunk| {
-                    // Not spilled: derived again from the same chunk, bit for bit.
-                    rotor_jerk(chunk, &jerk_options(ctx.req), &mut jerk);
                     count_progress(ctx.req, chunk);
                     pass.push(chunk)
                 })?;

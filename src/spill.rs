@@ -10,12 +10,14 @@
 //! before the residual scale is known, candidate columns chosen before θ̂) and so the
 //! reports; the spill keeps the second pass as it was: the same 1024-sample chunks in the
 //! same order (passed in segments, see below). Its cost is a write and a read of
-//! 8 bytes per value (168 B per sample of a quad× log with rotor accelerations, about the
-//! size of its CSV text: 1.7 GB of temp space for 10 M rows), memory copies through the
-//! page cache instead of tokenising and ~21 float parses per sample.
+//! 8 bytes per value (200 B per sample of a quad× log with rotor accelerations, a little
+//! more than its CSV text: 2 GB of temp space for 10 M rows), memory copies through the
+//! page cache instead of tokenising and ~21 float parses per sample. The rates of rotor
+//! acceleration Ω̈ derived in the first pass are spilled too: reading 32 B per sample
+//! back costs less than differentiating again.
 //!
-//! Format: per chunk, two little-endian u32 (rotor-speed and rotor-acceleration series
-//! counts), then every vector of the [`SampleChunk`] in field order, each as a
+//! Format: per chunk, three little-endian u32 (the series counts of rotor speed,
+//! acceleration and its rate), then every vector of the [`SampleChunk`] in field order, each as a
 //! little-endian u64 length followed by that many little-endian f64. The file lives in
 //! [`std::env::temp_dir`] (`TMPDIR`). On Unix its name is removed as soon as it is open
 //! (the space is freed when the process ends, however it ends: Ctrl-C or a kill leave
@@ -155,8 +157,9 @@ impl SpillWriter {
         self.tally = [self.tally[0] + tally[0], self.tally[1] + tally[1]];
         let b = &mut self.bytes;
         b.clear();
-        b.extend_from_slice(&(chunk.omega.len() as u32).to_le_bytes());
-        b.extend_from_slice(&(chunk.omega_dot.len() as u32).to_le_bytes());
+        for series in [&chunk.omega, &chunk.omega_dot, &chunk.omega_ddot] {
+            b.extend_from_slice(&(series.len() as u32).to_le_bytes());
+        }
         for v in vectors(chunk) {
             b.extend_from_slice(&(v.len() as u64).to_le_bytes());
             for x in v {
@@ -185,6 +188,7 @@ fn vectors(c: &SampleChunk) -> impl Iterator<Item = &Vec<f64>> {
         .chain(&c.rates)
         .chain(&c.omega)
         .chain(&c.omega_dot)
+        .chain(&c.omega_ddot)
         .chain(&c.wrench)
         .chain(std::iter::once(&c.height))
         .chain(&c.attitude)
@@ -197,6 +201,7 @@ fn vectors_mut(c: &mut SampleChunk) -> impl Iterator<Item = &mut Vec<f64>> {
         .chain(&mut c.rates)
         .chain(&mut c.omega)
         .chain(&mut c.omega_dot)
+        .chain(&mut c.omega_ddot)
         .chain(&mut c.wrench)
         .chain(std::iter::once(&mut c.height))
         .chain(&mut c.attitude)
@@ -256,31 +261,36 @@ impl Read for Positioned<'_> {
     }
 }
 
-/// The two rotor-series counts opening a chunk; `None` at the end of the file.
-fn read_counts(input: &mut impl Read) -> std::io::Result<Option<[usize; 2]>> {
-    let mut head = [0u8; 8];
+/// The three rotor-series counts (Ω, Ω̇, Ω̈) opening a chunk; `None` at the end of the
+/// file.
+fn read_counts(input: &mut impl Read) -> std::io::Result<Option<[usize; 3]>> {
+    let mut head = [0u8; 12];
     let got = input.read(&mut head[..1])?;
     if got == 0 {
         return Ok(None);
     }
     input.read_exact(&mut head[1..])?;
-    let count = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-    let (omega, omega_dot) = (count(&head[..4]), count(&head[4..]));
-    if omega > MAX_ROTORS || omega_dot > MAX_ROTORS {
-        return Err(corrupt("rotor series count out of range"));
+    let mut counts = [0; 3];
+    for (count, b) in counts.iter_mut().zip(head.chunks_exact(4)) {
+        let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        if n > MAX_ROTORS {
+            return Err(corrupt("rotor series count out of range"));
+        }
+        *count = n as usize;
     }
-    Ok(Some([omega as usize, omega_dot as usize]))
+    Ok(Some(counts))
 }
 
 /// Reads one chunk's vectors into `chunk` (its allocations reused); `bytes` is scratch.
 fn read_chunk(
     input: &mut impl Read,
-    [omega, omega_dot]: [usize; 2],
+    [omega, omega_dot, omega_ddot]: [usize; 3],
     chunk: &mut SampleChunk,
     bytes: &mut Vec<u8>,
 ) -> std::io::Result<()> {
     chunk.omega.resize_with(omega, Vec::new);
     chunk.omega_dot.resize_with(omega_dot, Vec::new);
+    chunk.omega_ddot.resize_with(omega_ddot, Vec::new);
     for v in vectors_mut(chunk) {
         let mut len = [0u8; 8];
         input.read_exact(&mut len)?;
@@ -332,6 +342,14 @@ mod tests {
             let mut c = SampleChunk::with_capacity(rotors, len, false);
             for k in 0..len {
                 c.push(&sample(k, rotors));
+            }
+            if rotors == 6 {
+                // Derived rates of rotor acceleration travel with the chunk.
+                c.omega_ddot = c
+                    .omega
+                    .iter()
+                    .map(|w| w.iter().map(|x| -x).collect())
+                    .collect();
             }
             chunks.push(c);
         }

@@ -58,6 +58,40 @@ fn a_gap_splits_the_log_into_segments_never_bridged() {
     assert_eq!(s.gaps[0].from, src.t[119]);
 }
 
+/// Joined chunks carry the same samples and summary as per-segment chunks, cut only
+/// every CHUNK_SAMPLES samples: 40 segments of 60 samples (2400) make 1024 + 1024 + 352,
+/// and segment_index names the segment of each chunk's last sample.
+#[test]
+fn joined_chunks_run_across_segments_with_the_same_samples() {
+    let vehicle = quad(0.0);
+    let mut src = analytic_chunk(2400, 100.0);
+    for (k, t) in src.t.iter_mut().enumerate() {
+        *t += 5.0 * (k / 60) as f64; // a 5 s hole every 60 samples
+    }
+    let path = tmp("joined.csv");
+    write_contract_csv(&path, [&src]).unwrap();
+    let opts = ReadOptions::default();
+    let mut by_segment = open_log(&path, &vehicle, None, &opts).unwrap();
+    let segmented: Vec<_> = by_segment.by_ref().map(Result::unwrap).collect();
+    assert_eq!(segmented.len(), 40);
+    let mut joined = open_log(&path, &vehicle, None, &opts).unwrap();
+    joined.join_segments();
+    let mut chunks = Vec::new();
+    let mut last_segments = Vec::new();
+    while let Some(c) = joined.next() {
+        chunks.push(c.unwrap());
+        last_segments.push(joined.segment_index());
+    }
+    let lens: Vec<usize> = chunks.iter().map(|c| c.len()).collect();
+    assert_eq!(lens, vec![1024, 1024, 352]);
+    // Samples 1023 and 2047 lie in segments 17 and 34; the last in segment 39.
+    assert_eq!(last_segments, vec![17, 34, 39]);
+    assert_same(&concat(&chunks), &concat(&segmented));
+    let (a, b) = (joined.summary(), by_segment.summary());
+    assert_eq!((a.samples, a.segments, a.gaps.len()), (2400, 40, 39));
+    assert_eq!((b.samples, b.segments, b.gaps.len()), (2400, 40, 39));
+}
+
 #[test]
 fn a_byte_order_mark_before_the_header_is_ignored() {
     let path = tmp("bom.csv");

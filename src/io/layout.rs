@@ -40,9 +40,10 @@ impl NormalEquations {
     pub fn push(&mut self, x: &[f64], y: &[f64]) {
         let n = self.n;
         let x = &x[..n];
-        for (r, &xr) in x.iter().enumerate() {
-            let upper = &mut self.xtx[r * n + r..(r + 1) * n];
-            for (dst, &xc) in upper.iter_mut().zip(&x[r..]) {
+        // The whole square, though only the upper triangle is read: rows of equal length
+        // vectorise, ragged ones did not (each entry's sum is the same either way).
+        for (row, &xr) in self.xtx.chunks_exact_mut(n).zip(x) {
+            for (dst, &xc) in row.iter_mut().zip(x) {
                 *dst += xr * xc;
             }
         }

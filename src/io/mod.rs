@@ -272,6 +272,8 @@ pub struct LogReader {
     weights: SgWeights,
     is_mcap: bool,
     actuator: Option<mapping::ActuatorMap>,
+    /// Chunks run on across segment ends ([`LogReader::join_segments`]).
+    join: bool,
 }
 
 /// Opens a CSV (contract or mapped), MCAP or ULog log for streaming; the format is
@@ -514,10 +516,22 @@ impl LogReader {
             weights: SgWeights::default(),
             is_mcap,
             actuator,
+            join: false,
         }
     }
 
-    /// Segment index (0-based) of the chunk returned last.
+    /// From now on a chunk is handed out only when it holds [`CHUNK_SAMPLES`] samples, or
+    /// at the end of the log: chunks run on across segment ends (gaps), so every chunk but
+    /// the last is full, and [`LogReader::segment_index`] is the segment of a chunk's last
+    /// sample. The samples and the summary are the same as without it; a log of short
+    /// segments (a sweep's one-sample test points) then costs one chunk per
+    /// [`CHUNK_SAMPLES`] samples instead of one per segment.
+    pub fn join_segments(&mut self) {
+        self.join = true;
+    }
+
+    /// Segment index (0-based) of the chunk returned last (of its last sample, when
+    /// [`LogReader::join_segments`] was called).
     pub fn segment_index(&self) -> usize {
         self.last_segment
     }
@@ -540,10 +554,10 @@ impl LogReader {
         }
     }
 
-    /// Reads, converts and checks the next sample; `Ok(None)` at end of file.
-    fn pull(&mut self) -> Result<Option<Row>, IoError> {
+    /// Reads, converts and checks the next sample into `row`; `Ok(false)` at end of file.
+    fn pull(&mut self, row: &mut Row) -> Result<bool, IoError> {
         let Some((loc, source_time)) = self.source.next_row(&mut self.raw)? else {
-            return Ok(None);
+            return Ok(false);
         };
         self.summary.rows_read += 1;
         if let (Some(a), Some(start)) = (&self.actuator, self.layout.start(Signal::RotorSpeeds)) {
@@ -579,14 +593,14 @@ impl LogReader {
                 ));
             }
         }
-        let mut row = Row {
+        *row = Row {
             loc,
             t: source_time.unwrap_or(0.0),
             ..Row::default()
         };
-        self.convert(&mut row)
+        self.convert(row)
             .map_err(|(slot, kind)| IoError::new(file, loc, self.label(slot), kind))?;
-        Ok(Some(row))
+        Ok(true)
     }
 
     /// Slot values (already SI) → row in FRD/NED.
@@ -692,10 +706,11 @@ impl LogReader {
     /// Gets the next row that continues the current segment into the window, or marks
     /// the segment end (gap or end of file). Returns false when nothing more can come.
     fn fill(&mut self) -> Result<(), IoError> {
+        let mut row = Row::default();
         loop {
-            let row = match self.pull() {
-                Ok(Some(row)) => row,
-                Ok(None) => {
+            match self.pull(&mut row) {
+                Ok(true) => {}
+                Ok(false) => {
                     self.done = true;
                     return Ok(());
                 }
@@ -703,7 +718,7 @@ impl LogReader {
                     self.drop_or_fail(e)?;
                     continue;
                 }
-            };
+            }
             let forced = self.source.take_segment_break();
             if let Some(last) = self.window.back() {
                 if forced && row.t > last.t {
@@ -740,7 +755,6 @@ impl LogReader {
                     return Ok(());
                 }
             }
-            let mut row = row;
             if let (Some(tau), Some(last)) = (
                 self.actuator.and_then(|a| a.time_constant),
                 self.window.back(),
@@ -777,46 +791,12 @@ impl LogReader {
     /// Emits the sample at window index `k` into the chunk.
     fn emit(&mut self, k: usize) {
         let n = self.vehicle.rotors;
-        let row = self.window[k];
-        let mut ang_acc = row.ang_acc;
-        let mut omega_dot = row.omega_dot;
-        if self.plan.diff_rates || self.plan.diff_omega {
-            let d = self.opts.derive;
-            let len = self.window.len();
-            let w = d.sg_window.min(len);
-            let lo = k.saturating_sub(d.sg_window / 2).min(len - w);
-            self.times.clear();
-            self.times
-                .extend(self.window.range(lo..lo + w).map(|r| r.t));
-            let Some(wts) = self.weights.get(&self.times, k - lo, d.sg_order) else {
-                let msg = format!(
-                    "{}: {}: segment of {len} samples is too short to differentiate (sg_order {})",
-                    self.summary.file,
-                    loc_text(row.loc),
-                    d.sg_order
-                );
-                self.count_drop("segment too short to differentiate", msg);
-                return;
-            };
-            let win = self.window.range(lo..lo + w);
-            if self.plan.diff_rates {
-                ang_acc = [0.0; 3];
-                for (wt, r) in wts.iter().zip(win.clone()) {
-                    for (acc, rate) in ang_acc.iter_mut().zip(r.rates) {
-                        *acc += wt * rate;
-                    }
-                }
-            }
-            if self.plan.diff_omega {
-                omega_dot = [0.0; MAX_ROTORS];
-                for (wt, r) in wts.iter().zip(win) {
-                    for (acc, w) in omega_dot[..n].iter_mut().zip(&r.omega[..n]) {
-                        *acc += wt * w;
-                    }
-                }
-            }
-        }
+        let Some((ang_acc, omega_dot)) = self.derivatives(k) else {
+            return;
+        };
         self.flag_spikes(k);
+        // Borrowed, not copied: a row is some 600 bytes, most of them unused here.
+        let row = &self.window[k];
         let force = if self.layout.has(Signal::Force) {
             row.force
         } else {
@@ -863,6 +843,53 @@ impl LogReader {
             .push(force, self.vehicle.mass, row.rates, &row.omega[..n]);
         self.summary.samples += 1;
         self.segment_samples += 1;
+    }
+
+    /// Angular and rotor accelerations of the sample at window index `k`: logged, or
+    /// differentiated over the window as the plan says. `None` (the sample dropped and
+    /// counted) when the segment is too short to differentiate.
+    fn derivatives(&mut self, k: usize) -> Option<([f64; 3], [f64; MAX_ROTORS])> {
+        let row = &self.window[k];
+        let (mut ang_acc, mut omega_dot) = (row.ang_acc, row.omega_dot);
+        if !self.plan.diff_rates && !self.plan.diff_omega {
+            return Some((ang_acc, omega_dot));
+        }
+        let n = self.vehicle.rotors;
+        let d = self.opts.derive;
+        let len = self.window.len();
+        let w = d.sg_window.min(len);
+        let lo = k.saturating_sub(d.sg_window / 2).min(len - w);
+        self.times.clear();
+        self.times
+            .extend(self.window.range(lo..lo + w).map(|r| r.t));
+        let Some(wts) = self.weights.get(&self.times, k - lo, d.sg_order) else {
+            let msg = format!(
+                "{}: {}: segment of {len} samples is too short to differentiate (sg_order {})",
+                self.summary.file,
+                loc_text(self.window[k].loc),
+                d.sg_order
+            );
+            self.count_drop("segment too short to differentiate", msg);
+            return None;
+        };
+        let win = self.window.range(lo..lo + w);
+        if self.plan.diff_rates {
+            ang_acc = [0.0; 3];
+            for (wt, r) in wts.iter().zip(win.clone()) {
+                for (acc, rate) in ang_acc.iter_mut().zip(r.rates) {
+                    *acc += wt * rate;
+                }
+            }
+        }
+        if self.plan.diff_omega {
+            omega_dot = [0.0; MAX_ROTORS];
+            for (wt, r) in wts.iter().zip(win) {
+                for (acc, w) in omega_dot[..n].iter_mut().zip(&r.omega[..n]) {
+                    *acc += wt * w;
+                }
+            }
+        }
+        Some((ang_acc, omega_dot))
     }
 
     /// Hampel test of rates, rotor speeds and force source at window index `k`.
@@ -962,6 +989,15 @@ impl LogReader {
         }
     }
 
+    /// [`LogReader::next_chunk`], lent mutably: the fit pipeline derives Ω̈ into it, or
+    /// swaps it for an empty chunk of the same signals (taken from an earlier chunk).
+    pub(crate) fn next_chunk_mut(&mut self) -> Option<Result<&mut SampleChunk, IoError>> {
+        match self.advance()? {
+            Ok(()) => Some(Ok(&mut self.chunk)),
+            Err(e) => Some(Err(e)),
+        }
+    }
+
     /// Steps to the next chunk, left in `chunk`: `None` at the end or after an error.
     fn advance(&mut self) -> Option<Result<(), IoError>> {
         if self.over {
@@ -1002,8 +1038,9 @@ impl LogReader {
                 return Ok(true);
             }
             if self.segment_closed() && self.next_emit == self.window.len() {
-                // Segment complete: hand out its last partial chunk, then start the next.
-                if !self.chunk.is_empty() {
+                // Segment complete: hand out its last partial chunk (unless chunks join
+                // segments and another follows), then start the next.
+                if !self.chunk.is_empty() && (!self.join || self.pending.is_none()) {
                     return Ok(true);
                 }
                 if self.segment_samples > 0 {
