@@ -444,6 +444,8 @@ struct Splitter {
     t0: Option<f64>,
     /// Fit and validation samples waiting for a full chunk.
     parts: [SampleChunk; 2],
+    /// Indices of the routed chunk's samples of each kind not yet in `parts`.
+    rows: [Vec<usize>; 2],
 }
 
 impl Splitter {
@@ -454,6 +456,7 @@ impl Splitter {
             role,
             t0,
             parts: Default::default(),
+            rows: Default::default(),
         }
     }
 
@@ -484,14 +487,22 @@ impl Splitter {
             while end < chunk.len() && holdout.holds_out(chunk.t[end], t0) == kind {
                 end += 1;
             }
-            kinds[usize::from(kind)] += (end - start) as u64;
-            let part = &mut self.parts[usize::from(kind)];
-            part.extend_from(chunk, start..end);
-            if part.len() >= CHUNK_SAMPLES {
-                sink(part, kind)?;
-                part.clear();
+            let k = usize::from(kind);
+            kinds[k] += (end - start) as u64;
+            // Runs are gathered by index, a kind's at a time: the part is handed on
+            // after the run that fills it, as if each run were appended on its own.
+            self.rows[k].extend(start..end);
+            if self.parts[k].len() + self.rows[k].len() >= CHUNK_SAMPLES {
+                self.parts[k].extend_from_rows(chunk, &self.rows[k]);
+                self.rows[k].clear();
+                sink(&self.parts[k], kind)?;
+                self.parts[k].clear();
             }
             start = end;
+        }
+        for (part, rows) in self.parts.iter_mut().zip(&mut self.rows) {
+            part.extend_from_rows(chunk, rows);
+            rows.clear();
         }
         Ok(kinds)
     }

@@ -217,6 +217,39 @@ impl SampleChunk {
         }
     }
 
+    /// Appends the samples of `src` at the indices `rows`, in that order (same rotor count
+    /// and optional signals): one gather per signal, where [`SampleChunk::extend_from`]
+    /// per run of a few samples (a sweep's alternating hold-out) cost a call per signal
+    /// and run.
+    pub fn extend_from_rows(&mut self, src: &SampleChunk, rows: &[usize]) {
+        let gather = |dst: &mut Vec<f64>, src: &[f64]| {
+            if !src.is_empty() {
+                dst.extend(rows.iter().map(|&i| src[i]));
+            }
+        };
+        gather(&mut self.t, &src.t);
+        for k in 0..3 {
+            gather(&mut self.velocity[k], &src.velocity[k]);
+            gather(&mut self.rates[k], &src.rates[k]);
+        }
+        let rotors = |dst: &mut Vec<Vec<f64>>, src: &[Vec<f64>]| {
+            dst.resize_with(src.len(), Vec::new);
+            for (d, s) in dst.iter_mut().zip(src) {
+                gather(d, s);
+            }
+        };
+        rotors(&mut self.omega, &src.omega);
+        rotors(&mut self.omega_dot, &src.omega_dot);
+        rotors(&mut self.omega_ddot, &src.omega_ddot);
+        for (d, s) in self.wrench.iter_mut().zip(&src.wrench) {
+            gather(d, s);
+        }
+        gather(&mut self.height, &src.height);
+        for (d, s) in self.attitude.iter_mut().zip(&src.attitude) {
+            gather(d, s);
+        }
+    }
+
     /// Copies sample `k` out of the chunk (without Ω̈, which [`Sample`] does not carry).
     pub fn sample(&self, k: usize) -> Sample {
         Sample {
@@ -259,6 +292,24 @@ mod tests {
         assert_eq!(b.len(), 2);
         assert_eq!(b.sample(0), a.sample(1));
         assert_eq!(b.sample(1), a.sample(2));
+        // Gathered rows 3, 0, 2 (with Ω̈ and attitude) equal the runs appended one by one.
+        a.omega_ddot = a
+            .omega
+            .iter()
+            .map(|w| w.iter().map(|x| -x).collect())
+            .collect();
+        a.attitude = std::array::from_fn(|c| (0..4).map(|k| (c * k) as f64).collect());
+        let (mut by_rows, mut by_runs) = (SampleChunk::default(), SampleChunk::default());
+        by_rows.extend_from_rows(&a, &[3, 0, 2]);
+        for k in [3, 0, 2] {
+            by_runs.extend_from(&a, k..k + 1);
+        }
+        assert_eq!(by_rows.len(), 3);
+        assert_eq!(by_rows.omega_ddot, by_runs.omega_ddot);
+        assert_eq!(by_rows.attitude, by_runs.attitude);
+        assert_eq!(by_rows.sample(0), a.sample(3));
+        assert_eq!(by_rows.sample(1), a.sample(0));
+        assert_eq!(by_rows.sample(2), a.sample(2));
     }
 }
 
