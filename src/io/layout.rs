@@ -7,7 +7,13 @@
 //! J_z Ω̇_i) (seed Eq. 16 sign convention, as in `airframe::closed_form_wrench`). So
 //! x_i = b_i / k, y_i = −a_i / k, σ_i = −sign(c_i) and J_z ≈ −σ_i d_i.
 
+use faer::linalg::matmul::matmul;
+use faer::{Accum, MatMut, MatRef, Par};
 use serde::Serialize;
+
+/// Observations a [`NormalEquations`] keeps before it adds them to its sums as two
+/// matrix products (one rank-1 update per observation cost ~90 ns at 9 regressors).
+const BLOCK_ROWS: usize = 256;
 
 /// Running normal equations of small least-squares problems y_k ≈ X β_k that share
 /// their regressors: XᵀX is summed once for all outputs y_k, and a problem may use the
@@ -21,6 +27,8 @@ pub struct NormalEquations {
     yty: Vec<f64>,
     sum_y: Vec<f64>,
     count: u64,
+    /// Observations not yet in the sums, row after row: n regressors, then the outputs.
+    pending: Vec<f64>,
 }
 
 impl NormalEquations {
@@ -33,33 +41,53 @@ impl NormalEquations {
             yty: vec![0.0; outputs],
             sum_y: vec![0.0; outputs],
             count: 0,
+            pending: Vec::new(),
         }
     }
 
     /// Adds one observation: regressors `x` (at least n) and one value per output.
     pub fn push(&mut self, x: &[f64], y: &[f64]) {
-        let n = self.n;
-        let x = &x[..n];
-        // The whole square, though only the upper triangle is read: rows of equal length
-        // vectorise, ragged ones did not (each entry's sum is the same either way).
-        for (row, &xr) in self.xtx.chunks_exact_mut(n).zip(x) {
-            for (dst, &xc) in row.iter_mut().zip(x) {
-                *dst += xr * xc;
-            }
-        }
-        for (k, &yk) in y.iter().enumerate() {
-            for (xty, &xr) in self.xty[k * n..(k + 1) * n].iter_mut().zip(x) {
-                *xty += xr * yk;
-            }
-            self.yty[k] += yk * yk;
-            self.sum_y[k] += yk;
-        }
+        let outputs = self.yty.len();
+        self.pending.extend_from_slice(&x[..self.n]);
+        self.pending.extend_from_slice(&y[..outputs]);
         self.count += 1;
+        if self.pending.len() == BLOCK_ROWS * (self.n + outputs) {
+            self.add_pending();
+        }
+    }
+
+    /// Adds the kept observations to the sums: XᵀX and XᵀY as matrix products (the
+    /// whole XᵀX square, though only its upper triangle is read), yᵀy and Σy in order.
+    fn add_pending(&mut self) {
+        let (n, m) = (self.n, self.yty.len());
+        let width = n + m;
+        let rows = self.pending.len() / width;
+        if rows == 0 {
+            return;
+        }
+        let x = MatRef::from_row_major_slice_with_stride(&self.pending, rows, n, width);
+        let y = MatRef::from_row_major_slice_with_stride(&self.pending[n..], rows, m, width);
+        let xtx = MatMut::from_row_major_slice_mut(&mut self.xtx, n, n);
+        matmul(xtx, Accum::Add, x.transpose(), x, 1.0, Par::Seq);
+        let xty = MatMut::from_column_major_slice_mut(&mut self.xty, n, m);
+        matmul(xty, Accum::Add, x.transpose(), y, 1.0, Par::Seq);
+        for row in self.pending.chunks_exact(width) {
+            for (k, &yk) in row[n..].iter().enumerate() {
+                self.yty[k] += yk * yk;
+                self.sum_y[k] += yk;
+            }
+        }
+        self.pending.clear();
     }
 
     /// Least-squares coefficients (columns equilibrated) of output `output` on the first
     /// `columns` regressors, and R² about the mean; `None` when singular or empty.
     pub fn solve(&self, output: usize, columns: usize) -> Option<(Vec<f64>, f64)> {
+        if !self.pending.is_empty() {
+            let mut summed = self.clone();
+            summed.add_pending();
+            return summed.solve(output, columns);
+        }
         let (stride, n) = (self.n, columns.min(self.n));
         if self.count <= n as u64 {
             return None;
@@ -215,8 +243,9 @@ mod tests {
     use super::*;
 
     /// Sharing XᵀX between outputs, and solving on its leading columns, gives what a
-    /// separate accumulator of those columns alone gives, bit for bit: the same products
-    /// summed in the same order.
+    /// separate accumulator of those columns alone gives: the same sums, up to the order
+    /// in which the matrix products add them (1e-12 relative on this well-conditioned
+    /// random design). 400 observations: one block summed, 144 still kept when solved.
     #[test]
     fn shared_normal_equations_solve_as_separate_ones() {
         let (n, lead, samples) = (9, 5, 400);
@@ -237,15 +266,15 @@ mod tests {
             short.push(&x[..lead], &y[..1]);
             full.push(&x, &y[1..]);
         }
-        let bits = |r: Option<(Vec<f64>, f64)>| {
-            let (beta, r2) = r.expect("regular");
-            (
-                beta.iter().map(|b| b.to_bits()).collect::<Vec<_>>(),
-                r2.to_bits(),
-            )
+        let close = |a: Option<(Vec<f64>, f64)>, b: Option<(Vec<f64>, f64)>| {
+            let ((a, ra), (b, rb)) = (a.expect("regular"), b.expect("regular"));
+            assert_eq!(a.len(), b.len());
+            for (x, y) in a.iter().zip(&b).chain([(&ra, &rb)]) {
+                assert!((x - y).abs() <= 1e-12 * y.abs(), "{x} vs {y}");
+            }
         };
-        assert_eq!(bits(shared.solve(0, lead)), bits(short.solve(0, lead)));
-        assert_eq!(bits(shared.solve(1, n)), bits(full.solve(0, n)));
+        close(shared.solve(0, lead), short.solve(0, lead));
+        close(shared.solve(1, n), full.solve(0, n));
         // Fewer samples than regressors: no solution.
         assert!(NormalEquations::new(3, 1).solve(0, 3).is_none());
     }
