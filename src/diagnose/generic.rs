@@ -426,18 +426,32 @@ impl Thinned {
 
     /// Offers every sample of `c` in order.
     pub fn push(&mut self, c: &SampleChunk) {
+        // The samples kept, gathered at once (one copy per signal, not per sample) up to
+        // the one that overfills the set, which is thinned before the next is kept.
+        let mut rows = Vec::new();
         for k in 0..c.len() {
             if self.seen.is_multiple_of(self.stride) {
-                if self.chunk.is_empty() {
-                    self.chunk = SampleChunk::with_capacity(c.rotor_count(), 0, false);
-                }
-                self.chunk.extend_from(c, k..k + 1);
-                if self.chunk.len() > self.cap {
+                rows.push(k);
+                if self.chunk.len() + rows.len() > self.cap {
+                    self.keep(c, &mut rows);
                     self.halve();
                 }
             }
             self.seen += 1;
         }
+        self.keep(c, &mut rows);
+    }
+
+    /// Appends the samples `rows` of `c` (emptied).
+    fn keep(&mut self, c: &SampleChunk, rows: &mut Vec<usize>) {
+        if rows.is_empty() {
+            return;
+        }
+        if self.chunk.is_empty() {
+            self.chunk = SampleChunk::with_capacity(c.rotor_count(), 0, false);
+        }
+        self.chunk.extend_from_rows(c, rows);
+        rows.clear();
     }
 
     fn halve(&mut self) {
@@ -476,9 +490,8 @@ impl Thinned {
 
 fn keep_every(c: &SampleChunk, every: usize) -> SampleChunk {
     let mut out = SampleChunk::with_capacity(c.rotor_count(), 0, false);
-    for k in (0..c.len()).step_by(every) {
-        out.extend_from(c, k..k + 1);
-    }
+    let rows: Vec<usize> = (0..c.len()).step_by(every).collect();
+    out.extend_from_rows(c, &rows);
     out
 }
 
