@@ -262,10 +262,10 @@ fn parse_threads(share: usize) -> usize {
 /// shorter) and returns the reader's summary. The chunks do not depend on how the reader
 /// or the caller chunked the samples, so a log gives the same statistics from a file and
 /// from memory: a file's reader cuts them so itself ([`LogReader::join_segments`]), a
-/// log in memory is re-cut ([`Rechunker`]). With a `share` of two threads or more, reading a file runs on a thread
-/// of its own that hands chunks over a bounded channel, so reading overlaps the
-/// consumer's work (memory stays at [`CHUNKS_IN_FLIGHT`] chunks, their buffers reused),
-/// and CSV text is parsed on [`parse_threads`] more.
+/// log in memory is re-cut ([`Rechunker`]). With a `share` of two threads or more,
+/// reading a file runs on a thread of its own that hands chunks over a bounded channel,
+/// so reading overlaps the consumer's work (memory stays at [`CHUNKS_IN_FLIGHT`] chunks,
+/// their buffers reused), and CSV text is parsed on [`parse_threads`] more.
 fn stream_log(
     source: &LogSource,
     req: &FitRequest,
