@@ -22,7 +22,7 @@
 //! for diagonal D). For quadrotor× this is 30 instead of 38 columns, ~1.5× less work.
 //!
 //! Each chunk is folded in by a blocked Householder QR of R stacked on the chunk that
-//! leaves R's zeros alone ([`triangular_update`]), and two accumulators merge by the same
+//! leaves R's zeros alone (`triangular_update`), and two accumulators merge by the same
 //! QR of [R_a; R_b]: a TSQR tree, so chunks, files and threads combine in any grouping
 //! with rounding-level differences only. Memory is O(q²) whatever the sample count.
 //! Cost: ~2q² flops per sample (q = 36 for the quad× model), the price of QR-grade

@@ -21,7 +21,7 @@ fn positive_zero(x: f64) -> f64 {
     x + 0.0
 }
 
-/// [`range_of`] of a slice, the same values at vector speed (under [`vectorized`]):
+/// [`range_of`] of a slice, the same values at vector speed (under `vectorized`):
 /// running minima and maxima in vector lanes, whose min/max skip NaN as `f64::min`/`max`
 /// do (a sequential fold waits on each comparison). Every extremum is one value whatever
 /// the order, a zero one once its sign is made +0.

@@ -28,7 +28,7 @@ pub fn parse_f64(text: &str) -> Result<f64, std::num::ParseFloatError> {
 /// a time (bytes of `row` past the field are read but never used): `None` where std
 /// must decide. A field of up to 7 digits before and after an optional point takes no
 /// branch per digit; one with 8 or more on either side is left to std at once, and one
-/// with an exponent to [`exact_fast_path`].
+/// with an exponent to `exact_fast_path`.
 pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
     let end = field.end.min(row.len());
     let start = field.start.min(end);
