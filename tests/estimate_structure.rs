@@ -408,6 +408,25 @@ fn scaled_error(theta: &[f64], reference: &[f64], scales: &[f64]) -> f64 {
     (num / den).sqrt()
 }
 
+/// `d` was dropped by construction (no data-dependent cause, condition number ∞), and
+/// the M_x OLS of `with` (the structure holding it) fits as `without` does: the same
+/// SSE to 1e-12 (the same columns, factored from the same rows).
+fn assert_dropped_by_construction(
+    d: &mrsysid::estimate::DroppedTerm,
+    without: &mrsysid::estimate::Fit,
+    with: &mrsysid::estimate::Fit,
+) {
+    assert_eq!(
+        (d.cause.as_deref(), d.condition_number),
+        (None, f64::INFINITY)
+    );
+    let (sse0, sse1) = (
+        without.axes[Axis::Mx as usize].ols.sse,
+        with.axes[Axis::Mx as usize].ols.sse,
+    );
+    assert!((sse1 / sse0 - 1.0).abs() < 1e-12, "{sse0:e} {sse1:e}");
+}
+
 /// The problem and parameters named when fitting with the `Refuse` policy fails (panics
 /// when it does not).
 fn refusal(structure: &mrsysid::model::ModelStructure, acc: &Accumulator) -> (String, Vec<String>) {
@@ -560,15 +579,7 @@ fn a_column_of_the_same_shape_on_one_axis_is_dropped_as_aliased() {
     let d = &ols_mx.dropped[0];
     assert_eq!(d.name, format!("{shared}@Mx ({label})"));
     assert_eq!(d.aliased_with, vec![format!("{shared} ({label})")]);
-    assert_eq!(
-        (d.cause.as_deref(), d.condition_number),
-        (None, f64::INFINITY)
-    );
-    let (sse0, sse1) = (
-        f0.axes[Axis::Mx as usize].ols.sse,
-        f1.axes[Axis::Mx as usize].ols.sse,
-    );
-    assert!((sse1 / sse0 - 1.0).abs() < 1e-12, "{sse0:e} {sse1:e}");
+    assert_dropped_by_construction(d, &f0, &f1);
     assert_eq!(
         f1.axes[Axis::Mx as usize].ols.columns,
         f0.axes[Axis::Mx as usize].ols.columns
@@ -624,13 +635,5 @@ fn a_column_spanned_by_the_terms_of_others_on_one_axis_is_dropped_as_aliased() {
         d.aliased_with,
         singles.iter().map(|&c| name(c)).collect::<Vec<_>>()
     );
-    assert_eq!(
-        (d.cause.as_deref(), d.condition_number),
-        (None, f64::INFINITY)
-    );
-    let (sse0, sse1) = (
-        f0.axes[Axis::Mx as usize].ols.sse,
-        f1.axes[Axis::Mx as usize].ols.sse,
-    );
-    assert!((sse1 / sse0 - 1.0).abs() < 1e-12, "{sse0:e} {sse1:e}");
+    assert_dropped_by_construction(d, &f0, &f1);
 }
