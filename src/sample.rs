@@ -185,36 +185,13 @@ impl SampleChunk {
 
     /// Appends samples `range` of `src` (same rotor count and optional signals).
     pub fn extend_from(&mut self, src: &SampleChunk, range: std::ops::Range<usize>) {
-        fn ext(dst: &mut Vec<f64>, src: &[f64], r: &std::ops::Range<usize>) {
-            match src.get(r.clone()) {
-                // A sweep's samples come one or two at a time: a call of `memmove` per
-                // signal and sample cost more than the copy.
-                Some(s) if s.len() <= 4 => s.iter().for_each(|&x| dst.push(x)),
-                Some(s) => dst.extend_from_slice(s),
-                None => {}
-            }
-        }
-        ext(&mut self.t, &src.t, &range);
-        for k in 0..3 {
-            ext(&mut self.velocity[k], &src.velocity[k], &range);
-            ext(&mut self.rates[k], &src.rates[k], &range);
-        }
-        let rotors = |dst: &mut Vec<Vec<f64>>, src: &[Vec<f64>]| {
-            dst.resize_with(src.len(), Vec::new);
-            for (d, s) in dst.iter_mut().zip(src) {
-                ext(d, s, &range);
-            }
-        };
-        rotors(&mut self.omega, &src.omega);
-        rotors(&mut self.omega_dot, &src.omega_dot);
-        rotors(&mut self.omega_ddot, &src.omega_ddot);
-        for (d, s) in self.wrench.iter_mut().zip(&src.wrench) {
-            ext(d, s, &range);
-        }
-        ext(&mut self.height, &src.height, &range);
-        for (d, s) in self.attitude.iter_mut().zip(&src.attitude) {
-            ext(d, s, &range);
-        }
+        self.append_each(src, |dst, src| match src.get(range.clone()) {
+            // A sweep's samples come one or two at a time: a call of `memmove` per
+            // signal and sample cost more than the copy.
+            Some(s) if s.len() <= 4 => s.iter().for_each(|&x| dst.push(x)),
+            Some(s) => dst.extend_from_slice(s),
+            None => {}
+        });
     }
 
     /// Appends the samples of `src` at the indices `rows`, in that order (same rotor count
@@ -222,31 +199,36 @@ impl SampleChunk {
     /// per run of a few samples (a sweep's alternating hold-out) cost a call per signal
     /// and run.
     pub fn extend_from_rows(&mut self, src: &SampleChunk, rows: &[usize]) {
-        let gather = |dst: &mut Vec<f64>, src: &[f64]| {
+        self.append_each(src, |dst, src| {
             if !src.is_empty() {
                 dst.extend(rows.iter().map(|&i| src[i]));
             }
-        };
-        gather(&mut self.t, &src.t);
+        });
+    }
+
+    /// `append(dst, src)` for every series of this chunk and the same series of `src`
+    /// (the rotor series made as many as `src` has first).
+    fn append_each(&mut self, src: &SampleChunk, mut append: impl FnMut(&mut Vec<f64>, &[f64])) {
+        append(&mut self.t, &src.t);
         for k in 0..3 {
-            gather(&mut self.velocity[k], &src.velocity[k]);
-            gather(&mut self.rates[k], &src.rates[k]);
+            append(&mut self.velocity[k], &src.velocity[k]);
+            append(&mut self.rates[k], &src.rates[k]);
         }
-        let rotors = |dst: &mut Vec<Vec<f64>>, src: &[Vec<f64>]| {
+        let mut rotors = |dst: &mut Vec<Vec<f64>>, src: &[Vec<f64>]| {
             dst.resize_with(src.len(), Vec::new);
             for (d, s) in dst.iter_mut().zip(src) {
-                gather(d, s);
+                append(d, s);
             }
         };
         rotors(&mut self.omega, &src.omega);
         rotors(&mut self.omega_dot, &src.omega_dot);
         rotors(&mut self.omega_ddot, &src.omega_ddot);
         for (d, s) in self.wrench.iter_mut().zip(&src.wrench) {
-            gather(d, s);
+            append(d, s);
         }
-        gather(&mut self.height, &src.height);
+        append(&mut self.height, &src.height);
         for (d, s) in self.attitude.iter_mut().zip(&src.attitude) {
-            gather(d, s);
+            append(d, s);
         }
     }
 

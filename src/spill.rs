@@ -17,12 +17,12 @@
 //! back costs less than differentiating again.
 //!
 //! Format: per chunk, three little-endian u32 (the series counts of rotor speed,
-//! acceleration and its rate), then every vector of the [`SampleChunk`] in field order, each as a
-//! little-endian u64 length followed by that many little-endian f64. The file lives in
-//! [`std::env::temp_dir`] (`TMPDIR`). On Unix its name is removed as soon as it is open
-//! (the space is freed when the process ends, however it ends: Ctrl-C or a kill leave
-//! nothing behind); elsewhere it is removed when its [`Spill`] is dropped, also on an
-//! error or a panic unwinding through the pipeline.
+//! acceleration and its rate), then every vector of the [`SampleChunk`] in field order,
+//! each as a little-endian u64 length followed by that many little-endian f64. The file
+//! lives in [`std::env::temp_dir`] (`TMPDIR`). On Unix its name is removed as soon as it
+//! is open (the space is freed when the process ends, however it ends: Ctrl-C or a kill
+//! leave nothing behind); elsewhere it is removed when its [`Spill`] is dropped, also on
+//! an error or a panic unwinding through the pipeline.
 //!
 //! The chunks are grouped in segments of a fixed number of chunks; the spill keeps where
 //! each segment starts and the caller's tally of the samples before it, so that segments
