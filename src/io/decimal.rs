@@ -32,11 +32,10 @@ pub fn parse_f64(text: &str) -> Result<f64, std::num::ParseFloatError> {
 pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
     let end = field.end.min(row.len());
     let start = field.start.min(end);
-    let mut i = start;
-    let negative = i < end && row[i] == b'-';
-    if i < end && (negative || row[i] == b'+') {
-        i += 1;
-    }
+    // The sign without a branch: signs of logged values are as good as random.
+    let first = if start < end { row[start] } else { 0 };
+    let negative = first == b'-';
+    let mut i = start + usize::from(negative | (first == b'+'));
     let word = load8(row, i);
     let int_digits = leading_digits(word).min(end - i);
     if int_digits == 8 {
@@ -66,7 +65,9 @@ pub fn fast_path_in(row: &[u8], field: std::ops::Range<usize>) -> Option<f64> {
     }
     // At most 14 digits: w < 2^53, and 10^fraction is exact.
     let magnitude = w as f64 / POW10[fraction];
-    Some(if negative { -magnitude } else { magnitude })
+    Some(f64::from_bits(
+        magnitude.to_bits() | (u64::from(negative) << 63),
+    ))
 }
 
 /// 10^0 … 10^7 as integers.
