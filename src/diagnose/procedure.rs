@@ -71,8 +71,10 @@
 //! removal is within noise when it
 //! raises the score by at most κ χ²₁(1 − α) above the best, κ the coloured-residual
 //! variance inflation ([`DiagnoseOptions::variance_inflation`]): a likelihood-ratio test
-//! of one term on held-out residuals. Left-out terms are reported as "not supported by
-//! these data". Control-effectiveness terms
+//! of one term on held-out residuals. Of two removals that score alike to rounding (one
+//! column twice, e.g. an Eq. 22 term and its freed copy) the added effect's term goes,
+//! so rounding never picks the term reported. Left-out terms are reported as "not
+//! supported by these data". Control-effectiveness terms
 //! ([`ModelStructure::is_control_effectiveness`]) are never left out.
 
 use serde::Serialize;
@@ -1054,6 +1056,11 @@ fn cv_score(cv: &CrossValidation, scale: &[[f64; 6]]) -> f64 {
         .sum()
 }
 
+/// Cross-validation scores this close (relative) are one score: the same model to
+/// rounding. Far below any noise bound (κ χ²₁(1 − α) ≥ 2.7 on scores of order one per
+/// held-out axis and fold), far above the rounding of the sums (~1e-16 relative).
+const SCORE_TIE: f64 = 1e-12;
+
 /// Leaves out terms (a parameter's columns on one axis) of the model with columns `kept`
 /// one at a time while it stays within noise of the best cross-validated score (module
 /// docs); returns them in order.
@@ -1091,7 +1098,7 @@ fn prune(
         if terms.is_empty() {
             break;
         }
-        let cheapest = map_on_threads(&terms, threads, |&term| {
+        let removals = map_on_threads(&terms, threads, |&term| {
             let without: Vec<usize> = kept
                 .iter()
                 .copied()
@@ -1101,9 +1108,8 @@ fn prune(
             Some((term, cv_score(&t.cv, &scale), t))
         })
         .into_iter()
-        .flatten()
-        .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some(((param, axis), score, t)) = cheapest else {
+        .flatten();
+        let Some(((param, axis), score, t)) = cheapest(removals, |r| r.1) else {
             break;
         };
         if score > best + noise {
@@ -1118,6 +1124,21 @@ fn prune(
         *current = t;
     }
     out
+}
+
+/// The removal with the smallest `score` among `removals` (in term order, (parameter,
+/// axis)); of two that score alike to rounding ([`SCORE_TIE`]: one column twice, e.g. an
+/// Eq. 22 term and its freed copy) the later, an added effect's term before Eq. 22's,
+/// whatever the rounding.
+fn cheapest<T>(removals: impl IntoIterator<Item = T>, score: impl Fn(&T) -> f64) -> Option<T> {
+    removals.into_iter().reduce(|cheapest, next| {
+        let s = score(&cheapest);
+        if score(&next) <= s + SCORE_TIE * s.abs() {
+            next
+        } else {
+            cheapest
+        }
+    })
 }
 
 /// Validation gain used to rank accepted candidates of one group: a named mechanism's
@@ -1427,5 +1448,31 @@ mod tests {
             finding(&weak3, &[], &["CG offset".into()]),
             "rotor 3 weaker by 9.8 %; explains about as much: CG offset"
         );
+    }
+
+    /// The smallest score is left out first; scores equal to rounding go to the later
+    /// term, so a rounding of 1e-16 never picks which of two equal columns is reported.
+    #[test]
+    fn removals_that_tie_to_rounding_leave_out_the_later_term() {
+        let score = |r: &(char, f64)| r.1;
+        let tied = 1.2e6 * (1.0 + 1e-15);
+        assert_eq!(
+            cheapest([('a', 1.2e6), ('b', tied), ('c', 1.3e6)], score),
+            Some(('b', tied))
+        );
+        assert_eq!(
+            cheapest([('a', tied), ('b', 1.2e6)], score),
+            Some(('b', 1.2e6))
+        );
+        // Apart by far less than any noise bound, but more than rounding: the smaller.
+        assert_eq!(
+            cheapest([('a', 1.2e6), ('b', 1.2e6 + 1e-3)], score),
+            Some(('a', 1.2e6))
+        );
+        assert_eq!(
+            cheapest([('a', 3.0), ('b', 2.0), ('c', 4.0)], score),
+            Some(('b', 2.0))
+        );
+        assert_eq!(cheapest(Vec::<(char, f64)>::new(), score), None);
     }
 }
