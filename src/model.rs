@@ -67,6 +67,9 @@ use crate::sample::{Axis, Sample, SampleChunk};
 use crate::util::{range_of, range_of_slice};
 use crate::vehicle::{ConfigurationClass, Vehicle};
 
+mod reuse;
+pub(crate) use reuse::Reuse;
+
 /// A per-sample quantity that regressor terms multiply.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
@@ -651,7 +654,7 @@ impl ModelStructure {
     /// into `ws` (column-major, reused across chunks; allocates only when a chunk is
     /// longer than any before).
     pub fn assemble(&self, chunk: &SampleChunk, ws: &mut Workspace) -> Result<(), ModelError> {
-        self.assemble_columns(chunk, ws, None)
+        self.assemble_columns(chunk, ws, None, &[])
     }
 
     /// [`Self::assemble`] of the columns j with `wanted[j]` only (and all outputs); the
@@ -664,7 +667,30 @@ impl ModelStructure {
         wanted: &[bool],
     ) -> Result<(), ModelError> {
         let wanted = (wanted.len() == self.columns.len()).then_some(wanted);
-        self.assemble_columns(chunk, ws, wanted)
+        self.assemble_columns(chunk, ws, wanted, &[])
+    }
+
+    /// How [`Self::assemble_reusing`] computes the columns j with `wanted[j]` (one entry
+    /// per column): runs of terms that are an earlier wanted column times one more signal
+    /// (a rotor's thrust terms times its wake factor) as that one product.
+    pub(crate) fn reuse_plan(&self, wanted: &[bool]) -> Vec<Option<Reuse>> {
+        reuse::plan(&self.columns, wanted)
+    }
+
+    /// [`Self::assemble_wanted`] by `plan` ([`Self::reuse_plan`] of the same `wanted`):
+    /// the same columns to rounding, with fewer products.
+    pub(crate) fn assemble_reusing(
+        &self,
+        chunk: &SampleChunk,
+        ws: &mut Workspace,
+        wanted: &[bool],
+        plan: &[Option<Reuse>],
+    ) -> Result<(), ModelError> {
+        assert!(
+            wanted.len() == self.columns.len() && plan.len() == wanted.len(),
+            "a reuse plan of this structure"
+        );
+        self.assemble_columns(chunk, ws, Some(wanted), plan)
     }
 
     fn assemble_columns(
@@ -672,6 +698,7 @@ impl ModelStructure {
         chunk: &SampleChunk,
         ws: &mut Workspace,
         wanted: Option<&[bool]>,
+        plan: &[Option<Reuse>],
     ) -> Result<(), ModelError> {
         self.check_chunk(chunk)?;
         let n = chunk.len();
@@ -704,6 +731,7 @@ impl ModelStructure {
         crate::util::vectorized(AssembleColumns {
             columns: &self.columns,
             wanted,
+            plan,
             dst: columns,
             cap,
             n,
@@ -1452,6 +1480,8 @@ struct AssembleColumns<'c, 'a, L: Fn(Signal) -> &'a [f64]> {
     columns: &'c [Column],
     /// The columns to assemble (all when `None`).
     wanted: Option<&'c [bool]>,
+    /// How each column reuses earlier ones (none when empty).
+    plan: &'c [Option<Reuse>],
     /// Column j at `j * cap`, `n` samples.
     dst: &'c mut [f64],
     cap: usize,
@@ -1469,8 +1499,12 @@ impl<'a, L: Fn(Signal) -> &'a [f64]> pulp::WithSimd for AssembleColumns<'_, 'a, 
             if self.wanted.is_some_and(|w| !w[j]) {
                 continue;
             }
-            let dst = &mut self.dst[j * cap..j * cap + n];
-            if !apply_pair_terms(dst, &col.terms, self.lookup) {
+            let (done, todo) = self.dst.split_at_mut(j * cap);
+            let dst = &mut todo[..n];
+            if let Some(Some(reuse)) = self.plan.get(j) {
+                let earlier = |c: usize| &done[c * cap..c * cap + n];
+                apply_reuse(dst, reuse, &col.terms, earlier, self.lookup);
+            } else if !apply_pair_terms(dst, &col.terms, self.lookup) {
                 for (i, t) in col.terms.iter().enumerate() {
                     apply_term(dst, t, i == 0, 1.0, self.lookup);
                 }
@@ -1530,6 +1564,30 @@ fn apply_pair_terms<'a>(
         }
     }
     true
+}
+
+/// `dst = Σ runs ratio · [signal ⊙] earlier(column) + Σ other terms` ([`Reuse`] of the
+/// column of `terms`; `earlier(c)` the assembled column c).
+#[inline(always)]
+fn apply_reuse<'a, 'e>(
+    dst: &mut [f64],
+    reuse: &Reuse,
+    terms: &[Term],
+    earlier: impl Fn(usize) -> &'e [f64],
+    lookup: &impl Fn(Signal) -> &'a [f64],
+) {
+    for (k, run) in reuse.runs.iter().enumerate() {
+        let (x, c) = (earlier(run.column), run.ratio);
+        match (run.signal.map(lookup), k == 0) {
+            (Some(y), true) => zip2(dst, x, y, |a, b| c * a * b),
+            (Some(y), false) => zip2_add(dst, x, y, |a, b| c * a * b),
+            (None, true) => zip1(dst, x, |a| c * a),
+            (None, false) => zip1_add(dst, x, |a| c * a),
+        }
+    }
+    for &t in &reuse.terms {
+        apply_term(dst, &terms[t], false, 1.0, lookup);
+    }
 }
 
 /// `dst (=|+=) scale · coef · Π factors`, one vectorisable loop per term.
@@ -1918,6 +1976,92 @@ mod tests {
     /// Three-factor terms are summed in one pass with the products of the pairwise fold
     /// ((c·x)·y)·z, bit for bit; an assembly of the wanted columns gives the same bits in
     /// those columns and the same outputs.
+    /// A column made of an earlier column's terms times a signal (a rotor's thrust times
+    /// its wake factor), or of an earlier column's terms as they are (M_z from the F_x and
+    /// F_y in-plane force columns), is assembled from that column, with the same values to
+    /// rounding; a run whose coefficients are not proportional, or an earlier column not
+    /// assembled, is not reused.
+    #[test]
+    fn columns_reusing_earlier_columns_assemble_to_rounding() {
+        use Signal::*;
+        let v = quad();
+        let mut s = ModelStructure::eq22(&v, ModelOptions::default());
+        let column = |label: &str, terms: Vec<Term>| Column {
+            axis: Axis::Fz,
+            param: 0,
+            label: label.into(),
+            terms,
+        };
+        let a = vec![term(2.0, &[U, W]), term(3.0, &[V])];
+        let times_p = vec![term(4.0, &[U, W, P]), term(6.0, &[V, P]), term(1.5, &[Q])];
+        let scaled = vec![term(0.7, &[R]), term(-1.0, &[U, W]), term(-1.5, &[V])];
+        let not_proportional = vec![term(4.0, &[U, W, P]), term(7.0, &[V, P])];
+        let param = s.add_parameter(
+            Parameter {
+                name: "x".into(),
+                unit: "-".into(),
+            },
+            vec![
+                column("a", a),
+                column("a*p + q", times_p),
+                column("r - a/2", scaled),
+                column("not a*p", not_proportional),
+            ],
+        );
+        let first = (0..s.columns.len())
+            .find(|&j| s.columns[j].param == param)
+            .expect("the added columns");
+        let all = vec![true; s.columns.len()];
+        let plan = s.reuse_plan(&all);
+        let run = |signal, ratio| reuse::Run {
+            column: first,
+            signal,
+            ratio,
+        };
+        let reuse = |runs, terms| {
+            Some(Reuse {
+                runs: vec![runs],
+                terms,
+            })
+        };
+        assert_eq!(plan[first + 1], reuse(run(Some(P), 2.0), vec![2]));
+        assert_eq!(plan[first + 2], reuse(run(None, -0.5), vec![0]));
+        assert_eq!(plan[first + 3], None);
+        let mut without_a = all.clone();
+        without_a[first] = false;
+        assert_eq!(s.reuse_plan(&without_a)[first + 1], None);
+
+        let mut chunk = SampleChunk::with_capacity(4, 64, true);
+        for k in 0..64 {
+            let f = k as f64;
+            chunk.push(&Sample {
+                velocity: [0.3 * f - 7.1, 1.0 / (f + 3.0), (0.1 * f).sin()],
+                rates: [0.01 * f - 0.2, (0.2 * f).cos(), -0.5],
+                omega: vec![400.0 + 3.7 * f; 4],
+                omega_dot: vec![1.0; 4],
+                ..Sample::default()
+            });
+        }
+        let (mut terms, mut reused) = (Workspace::default(), Workspace::default());
+        s.assemble(&chunk, &mut terms).unwrap();
+        s.assemble_reusing(&chunk, &mut reused, &all, &plan)
+            .unwrap();
+        for (j, how) in plan.iter().enumerate() {
+            let (x, y) = (terms.column(j), reused.column(j));
+            // The same terms summed in another order: a few roundings of the largest.
+            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for k in 0..64 {
+                assert!(
+                    (x[k] - y[k]).abs() <= 8.0 * f64::EPSILON * scale,
+                    "column {j}, sample {k}"
+                );
+            }
+            if how.is_none() {
+                assert_eq!(x, y, "column {j} is assembled term by term");
+            }
+        }
+    }
+
     #[test]
     fn three_factor_terms_and_wanted_columns_assemble_exactly() {
         use Signal::*;

@@ -29,11 +29,11 @@ use crate::estimate::{
 };
 use crate::io::derive::{JerkScratch, rotor_jerk};
 use crate::io::{self, DeriveOptions, LogReader, Mapping, ReadOptions, Summary};
-use crate::model::{ModelStructure, Workspace};
+use crate::model::{ModelStructure, Reuse, Workspace};
 use crate::sample::{SampleChunk, Signals};
 use crate::source::LogSource;
 use crate::spill::{Spill, SpillWriter};
-use crate::stats::{AccumulateError, Accumulator};
+use crate::stats::{AccumulateError, Accumulator, stored_columns_of};
 use crate::vehicle::Vehicle;
 
 /// Time-segment hold-out of the fit logs.
@@ -742,6 +742,9 @@ struct Extended {
     candidates: Vec<Candidate>,
     params: Vec<Vec<usize>>,
     regions: LocalRegions,
+    /// The columns its accumulators store, and how they are assembled from each other.
+    stored: Vec<bool>,
+    plan: Vec<Option<Reuse>>,
 }
 
 impl Extended {
@@ -764,7 +767,10 @@ impl Extended {
             has_attitude: signals.attitude,
         };
         let set = candidate_set_on_threads(&ctx, Some(screening), options, req.threads)?;
+        let stored = stored_columns_of(&set.extended);
         Ok(Self {
+            plan: set.extended.reuse_plan(&stored),
+            stored,
             structure: set.extended,
             candidates: set.candidates,
             params: set.params,
@@ -1169,7 +1175,11 @@ impl SegmentState<'_> {
         let ws = &mut self.ws;
         let at = |e: AccumulateError| accumulate_error(source)(e.after(self.first[k]));
         if let (Some(ext), Some(acc)) = (&ctx.extended, share.candidates.as_mut()) {
-            acc[k].push(&ext.structure, part, ws).map_err(at)?;
+            let assembled = ext
+                .structure
+                .assemble_reusing(part, ws, &ext.stored, &ext.plan);
+            assembled.map_err(|e| at(e.into()))?;
+            acc[k].push_assembled(ws).map_err(at)?;
             if local_kind(self.role) == Some(to_validation) {
                 ext.regions
                     .push(

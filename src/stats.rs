@@ -119,6 +119,13 @@ fn stored_columns(p: usize, representative: &[usize]) -> Vec<bool> {
     stored
 }
 
+/// Which columns of `structure` an [`Accumulator`] of it stores and so has
+/// [`Accumulator::push`] assemble (one per shape).
+pub(crate) fn stored_columns_of(structure: &ModelStructure) -> Vec<bool> {
+    let (_, representative) = column_shapes(&structure.columns);
+    stored_columns(structure.columns.len(), &representative)
+}
+
 /// Inserts `h` into the sorted set `set` unless it is there or the set is full.
 fn insert_distinct(set: &mut Vec<u64>, h: u64) {
     if set.len() < DISTINCT_ROWS_CAP
