@@ -430,7 +430,7 @@ fn trial(
         options,
         SingularValues::WhenRankInDoubt,
     )?;
-    let cv = estimate::cross_validate(&structure, &stats.folds.select(&columns), options)?;
+    let cv = held_out(stats, &structure, &columns, options)?;
     let mut std = vec![0.0; structure.params.len()];
     let mut p = vec![1.0; structure.params.len()];
     let inflation = inflation.max(1.0).sqrt();
@@ -446,6 +446,17 @@ fn trial(
         structure,
         columns,
     })
+}
+
+/// The held-out errors on every fold of `structure`, the sub-model of `stats.extended`
+/// with columns `columns`: what scores a [`trial`], without its fit on all data.
+fn held_out(
+    stats: &CandidateStatistics,
+    structure: &ModelStructure,
+    columns: &[usize],
+    options: &FitOptions,
+) -> Result<CrossValidation, EstimateError> {
+    estimate::cross_validate(structure, &stats.folds.select(columns), options)
 }
 
 /// P-value of the Wald test that the parameters `own` (indices into the trial's
@@ -1098,23 +1109,44 @@ fn prune(
         if terms.is_empty() {
             break;
         }
-        let removals = map_on_threads(&terms, threads, |&term| {
-            let without: Vec<usize> = kept
-                .iter()
-                .copied()
-                .filter(|&j| (column(j).param, column(j).axis) != term)
-                .collect();
-            let t = trial(stats, &without, fit_options, options.variance_inflation).ok()?;
-            Some((term, cv_score(&t.cv, &scale), t))
-        })
-        .into_iter()
-        .flatten();
-        let Some(((param, axis), score, t)) = cheapest(removals, |r| r.1) else {
+        // Each removal scored on the folds only; the one chosen is then fitted in full.
+        let mut removals: Vec<((usize, Axis), f64, Vec<usize>)> =
+            map_on_threads(&terms, threads, |&term| {
+                let without: Vec<usize> = kept
+                    .iter()
+                    .copied()
+                    .filter(|&j| (column(j).param, column(j).axis) != term)
+                    .collect();
+                let structure = stats.extended.select_columns(&without);
+                let cv = held_out(stats, &structure, &without, fit_options).ok()?;
+                Some((term, cv_score(&cv, &scale), without))
+            })
+            .into_iter()
+            .flatten()
+            .collect();
+        let chosen = loop {
+            let Some(i) = cheapest(0..removals.len(), |&i| removals[i].1) else {
+                break None;
+            };
+            if removals[i].1 > best + noise {
+                break None;
+            }
+            // A removal whose fit on all data fails is no trial model: the next cheapest.
+            match trial(
+                stats,
+                &removals[i].2,
+                fit_options,
+                options.variance_inflation,
+            ) {
+                Ok(t) => break Some((removals[i].0, removals[i].1, t)),
+                Err(_) => {
+                    removals.remove(i);
+                }
+            }
+        };
+        let Some(((param, axis), score, t)) = chosen else {
             break;
         };
-        if score > best + noise {
-            break;
-        }
         out.push(Unsupported {
             name: format!("{} on {axis}", stats.extended.params[param].name),
             score_change: score - best,
