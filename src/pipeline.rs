@@ -17,7 +17,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use crate::CHUNK_SAMPLES;
-use crate::diagnose::local::{LocalFolds, LocalRegions};
+use crate::diagnose::local::{ActivityParts, LocalFolds, LocalRegions};
 use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
     SCREENING_SAMPLES, Thinned, candidate_set_on_threads, diagnose_on_threads,
@@ -802,9 +802,9 @@ struct LogPass {
     span: [(f64, f64); 2],
     /// Candidate-effect statistics (fitted, held-out samples), when diagnosing.
     candidates: Option<[Accumulator; 2]>,
-    /// The same over the samples where each local candidate acts, one per region, from
+    /// The same over the samples where local candidates act, by activity pattern, from
     /// the kind [`local_kind`] names (empty for a validation log).
-    local: Vec<Accumulator>,
+    local: ActivityParts,
 }
 
 /// Which samples of a log (fit: false, held-out: true) the local-region statistics are
@@ -854,7 +854,7 @@ fn second_pass(
             Some(start)
         })
         .collect();
-    let mut shares = run_jobs(jobs, req, |i, path, role, threads| {
+    let shares = run_jobs(jobs, req, |i, path, role, threads| {
         let at = Start {
             seen: starts[i],
             in_log: [0; 2],
@@ -886,11 +886,15 @@ fn second_pass(
     let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
         return Ok(());
     };
-    let local_parts: Vec<Vec<Accumulator>> = shares
-        .iter_mut()
+    let local_parts = shares
+        .iter()
+        .zip(jobs)
         .take(req.logs.len())
-        .map(|s| std::mem::take(&mut s.local))
-        .collect();
+        .map(|(s, (source, _))| {
+            let regions = ext.regions.per_region(&s.local, &ext.structure);
+            regions.map_err(accumulate_error(source))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let per_log: Vec<[Accumulator; 2]> = shares.into_iter().filter_map(|s| s.candidates).collect();
     let n_fit = req.logs.len();
     if per_log.len() != jobs.len() {
@@ -987,7 +991,7 @@ fn pass_log(
     threads: usize,
     at: Start,
 ) -> Result<LogPass, Error> {
-    let mut share = LogPass::empty(ctx, role);
+    let mut share = LogPass::empty(ctx);
     let mut append = |part: LogPass| share.append(part).map_err(accumulate_error(source));
     match spill {
         Some(spill) => {
@@ -1123,7 +1127,7 @@ impl<'a> SegmentPass<'a> {
             state: SegmentState {
                 ctx,
                 role,
-                share: LogPass::empty(ctx, role),
+                share: LogPass::empty(ctx),
                 seen: at.seen,
                 in_log: at.in_log,
                 first: at.in_log,
@@ -1185,6 +1189,7 @@ impl SegmentState<'_> {
                     .push(
                         part,
                         ws,
+                        &ext.structure,
                         &mut share.local,
                         &mut self.active_ws,
                         &mut self.part_ws,
@@ -1223,7 +1228,7 @@ impl SegmentState<'_> {
 
 impl LogPass {
     /// The share of no samples.
-    fn empty(ctx: &PassContext, role: Role) -> Self {
+    fn empty(ctx: &PassContext) -> Self {
         Self {
             residuals: ctx.residuals.clone(),
             series: Default::default(),
@@ -1234,10 +1239,7 @@ impl LogPass {
                     Accumulator::new(&e.structure),
                 ]
             }),
-            local: match (&ctx.extended, local_kind(role)) {
-                (Some(e), Some(_)) => e.regions.accumulators(&e.structure),
-                _ => Vec::new(),
-            },
+            local: ActivityParts::default(),
         }
     }
 
@@ -1264,9 +1266,7 @@ impl LogPass {
                 a.merge(b)?;
             }
         }
-        for (a, b) in self.local.iter_mut().zip(&later.local) {
-            a.merge(b)?;
-        }
+        self.local.merge(&later.local)?;
         Ok(())
     }
 

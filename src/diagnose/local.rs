@@ -36,7 +36,8 @@ pub struct LocalRegions {
 
 impl LocalRegions {
     /// The regions of the candidates with an activity; `base` supplies the vehicle's
-    /// geometry for the signals.
+    /// geometry for the signals. At most 64 (a bit each in an activity pattern; the
+    /// candidate library has five).
     pub fn new(base: &ModelStructure, candidates: &[Candidate]) -> Self {
         let mut activity = base.select_columns(&[]);
         let mut regions = Vec::new();
@@ -57,6 +58,7 @@ impl LocalRegions {
             regions.push(c);
             thresholds.push(a.threshold);
         }
+        assert!(regions.len() <= 64, "at most 64 local candidates");
         Self {
             candidates: regions,
             thresholds,
@@ -74,25 +76,19 @@ impl LocalRegions {
         self.candidates.is_empty()
     }
 
-    /// One empty accumulator over `extended` per region.
-    pub fn accumulators(&self, extended: &ModelStructure) -> Vec<Accumulator> {
-        self.candidates
-            .iter()
-            .map(|_| Accumulator::new(extended))
-            .collect()
-    }
-
-    /// Pushes the samples of `chunk` where each region's candidate acts into that
-    /// region's accumulator in `into` (one per region, from [`Self::accumulators`]).
-    /// `assembled` must hold `chunk` as those accumulators' `push` assembles it: the active rows are gathered from it rather
-    /// than assembled again (every regressor is a function of its own sample, so this is
-    /// the same as assembling the active part). `active_ws` takes the activity signals,
-    /// `part_ws` the gathered rows (both reused across chunks).
+    /// Pushes the samples of `chunk` where some region's candidate acts into `into`, by
+    /// activity pattern (the regions acting at the sample): a sample in several regions
+    /// is folded once. `assembled` must hold `chunk` as an accumulator over `extended`
+    /// assembles it: the active rows are gathered from it rather than assembled again
+    /// (every regressor is a function of its own sample, so this is the same as
+    /// assembling the active part). `active_ws` takes the activity signals, `part_ws` the
+    /// gathered rows (both reused across chunks).
     pub fn push(
         &self,
         chunk: &SampleChunk,
         assembled: &Workspace,
-        into: &mut [Accumulator],
+        extended: &ModelStructure,
+        into: &mut ActivityParts,
         active_ws: &mut Workspace,
         part_ws: &mut Workspace,
     ) -> Result<(), AccumulateError> {
@@ -102,22 +98,87 @@ impl LocalRegions {
         self.activity
             .assemble(chunk, active_ws)
             .map_err(AccumulateError::from)?;
+        let signals: Vec<&[f64]> = (0..self.len()).map(|k| active_ws.column(k)).collect();
+        let patterns = activity_patterns(&signals, &self.thresholds);
+        let mut acting: Vec<u64> = patterns.iter().copied().filter(|&m| m != 0).collect();
+        acting.sort_unstable();
+        acting.dedup();
         let mut rows = Vec::with_capacity(chunk.len());
-        for (k, acc) in into.iter_mut().enumerate() {
-            active_rows(active_ws.column(k), self.thresholds[k], &mut rows);
-            if !rows.is_empty() {
-                assembled.gather(chunk, &rows, acc.stored_columns(), part_ws);
-                acc.push_assembled(part_ws)?;
+        for pattern in acting {
+            rows.clear();
+            rows.extend((0..patterns.len()).filter(|&i| patterns[i] == pattern));
+            let acc = into.part(pattern, extended);
+            assembled.gather(chunk, &rows, acc.stored_columns(), part_ws);
+            acc.push_assembled(part_ws)?;
+        }
+        Ok(())
+    }
+
+    /// Each region's statistics over `extended` from `parts`: the patterns it acts in,
+    /// merged in pattern order.
+    pub fn per_region(
+        &self,
+        parts: &ActivityParts,
+        extended: &ModelStructure,
+    ) -> Result<Vec<Accumulator>, AccumulateError> {
+        (0..self.len()).map(|k| parts.region(k, extended)).collect()
+    }
+}
+
+/// Each sample's activity pattern: bit k set where `signals[k]` reaches `thresholds[k]`
+/// in magnitude (at most 64 regions, [`LocalRegions::new`]).
+fn activity_patterns(signals: &[&[f64]], thresholds: &[f64]) -> Vec<u64> {
+    let n = signals.first().map_or(0, |s| s.len());
+    let mut patterns = vec![0u64; n];
+    for (k, (signal, &threshold)) in signals.iter().zip(thresholds).enumerate() {
+        for (m, v) in patterns.iter_mut().zip(*signal) {
+            *m |= u64::from(v.abs() >= threshold) << k;
+        }
+    }
+    patterns
+}
+
+/// Statistics of the samples where local candidates act, one accumulator per activity
+/// pattern ([`LocalRegions::push`]); [`LocalRegions::per_region`] makes each region's.
+#[derive(Debug, Clone, Default)]
+pub struct ActivityParts {
+    /// (pattern, statistics), patterns ascending.
+    parts: Vec<(u64, Accumulator)>,
+}
+
+impl ActivityParts {
+    /// The statistics of `pattern` (empty over `extended` when there are none yet).
+    fn part(&mut self, pattern: u64, extended: &ModelStructure) -> &mut Accumulator {
+        let at = match self.parts.binary_search_by_key(&pattern, |(m, _)| *m) {
+            Ok(at) => at,
+            Err(at) => {
+                self.parts.insert(at, (pattern, Accumulator::new(extended)));
+                at
+            }
+        };
+        &mut self.parts[at].1
+    }
+
+    /// Merges `later`'s statistics (of other samples) pattern by pattern.
+    pub fn merge(&mut self, later: &ActivityParts) -> Result<(), AccumulateError> {
+        for (pattern, part) in &later.parts {
+            match self.parts.binary_search_by_key(pattern, |(m, _)| *m) {
+                Ok(at) => self.parts[at].1.merge(part)?,
+                Err(at) => self.parts.insert(at, (*pattern, part.clone())),
             }
         }
         Ok(())
     }
-}
 
-/// The indices (in order) of the samples whose activity `values` reach `threshold`.
-fn active_rows(values: &[f64], threshold: f64, rows: &mut Vec<usize>) {
-    rows.clear();
-    rows.extend((0..values.len()).filter(|&i| values[i].abs() >= threshold));
+    /// Region `k`'s statistics over `extended`: the patterns with bit k, merged in
+    /// pattern order.
+    fn region(&self, k: usize, extended: &ModelStructure) -> Result<Accumulator, AccumulateError> {
+        let mut region = Accumulator::new(extended);
+        for (_, part) in self.parts.iter().filter(|(m, _)| m >> k & 1 == 1) {
+            region.merge(part)?;
+        }
+        Ok(region)
+    }
 }
 
 /// Fewest active held-out samples per fold for a gain where a candidate acts: the NRMSE
@@ -161,20 +222,21 @@ mod tests {
     use crate::sim::{Effects, RotorFile, TruthModel};
     use crate::vehicle::Vehicle;
 
-    #[test]
-    fn a_fold_with_fewer_than_the_minimum_active_samples_has_no_local_gain() {
+    /// `n` samples of a Latin-hypercube sweep of the shipped quadrotor× (no effects) and
+    /// its Eq. 22 structure.
+    fn quad_x_sweep(n: usize, seed: u64) -> (SampleChunk, ModelStructure) {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let v = Vehicle::from_toml_file(&root.join("data/vehicles/quad_x.toml")).unwrap();
         let effects = Effects::new(Vec::new(), &v).unwrap();
         let truth = TruthModel::new(&v, &RotorFile::default(), effects).unwrap();
-        let all = sweep(
-            &truth,
-            &Ranges::scaled_to(&truth),
-            Design::LatinHypercube,
-            200,
-            1,
-        );
-        let s = ModelStructure::eq22(&v, ModelOptions::default());
+        let ranges = Ranges::scaled_to(&truth);
+        let all = sweep(&truth, &ranges, Design::LatinHypercube, n, seed);
+        (all, ModelStructure::eq22(&v, ModelOptions::default()))
+    }
+
+    #[test]
+    fn a_fold_with_fewer_than_the_minimum_active_samples_has_no_local_gain() {
+        let (all, s) = quad_x_sweep(200, 1);
         let first = |n: usize| {
             let mut c = SampleChunk::default();
             c.extend_from(&all, 0..n);
@@ -191,14 +253,51 @@ mod tests {
         assert_eq!(local.share, n as f64 / 100.0);
     }
 
+    /// A region's statistics merged from the activity patterns it acts in equal those of
+    /// its own samples pushed directly, to rounding (the same rows in another order).
     #[test]
-    fn the_active_rows_are_the_samples_at_or_above_the_threshold_in_order() {
-        let values = [0.0, 0.02, -0.01, 0.005, 0.0, 0.5];
-        let mut rows = vec![9];
-        active_rows(&values, 0.01, &mut rows);
-        // |value| ≥ 0.01: samples 1, 2 (a run) and 5 (at the end).
-        assert_eq!(rows, vec![1, 2, 5]);
-        active_rows(&values, 1.0, &mut rows);
-        assert!(rows.is_empty());
+    fn a_region_merged_from_its_patterns_equals_its_samples_pushed_directly() {
+        let (all, s) = quad_x_sweep(300, 2);
+        let mut ws = Workspace::default();
+        s.assemble(&all, &mut ws).unwrap();
+        // Three regions over the samples: even i, i a multiple of 3, i ≥ 200.
+        let acts = |i: usize| [i.is_multiple_of(2), i.is_multiple_of(3), i >= 200];
+        let pattern = |i: usize| (0..3).map(|k| u64::from(acts(i)[k]) << k).sum::<u64>();
+        let mut parts = ActivityParts::default();
+        let mut part_ws = Workspace::default();
+        for m in 1..8u64 {
+            let rows: Vec<usize> = (0..all.len()).filter(|&i| pattern(i) == m).collect();
+            let acc = parts.part(m, &s);
+            ws.gather(&all, &rows, acc.stored_columns(), &mut part_ws);
+            acc.push_assembled(&part_ws).unwrap();
+        }
+        for k in 0..3 {
+            let merged = parts.region(k, &s).unwrap();
+            let rows: Vec<usize> = (0..all.len()).filter(|&i| acts(i)[k]).collect();
+            let mut direct = Accumulator::new(&s);
+            ws.gather(&all, &rows, direct.stored_columns(), &mut part_ws);
+            direct.push_assembled(&part_ws).unwrap();
+            assert_eq!(merged.count(), rows.len() as u64);
+            let q = direct.rows();
+            let scale = (0..q).map(|i| direct.r(i, i).abs()).fold(0.0, f64::max);
+            for i in 0..q {
+                for j in i..q {
+                    let (a, b) = (merged.r(i, j), direct.r(i, j));
+                    assert!(
+                        (a - b).abs() <= 1e-12 * scale,
+                        "region {k}, R[{i}, {j}]: {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_sample_s_pattern_has_a_bit_for_each_region_at_or_above_its_threshold() {
+        let ground = [0.0, 0.02, -0.01, 0.005, 0.0, 0.5];
+        let wake = [0.3, 0.0, 0.1, 0.0, 0.0, -0.3];
+        // |value| ≥ 0.01 (bit 0) and ≥ 0.1 (bit 1): the threshold itself acts.
+        let patterns = activity_patterns(&[&ground, &wake], &[0.01, 0.1]);
+        assert_eq!(patterns, vec![0b10, 0b01, 0b11, 0, 0, 0b11]);
     }
 }

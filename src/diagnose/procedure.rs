@@ -81,7 +81,7 @@ use serde::Serialize;
 use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
 
 use super::candidates::{Candidate, EffectKind};
-use super::local::LocalFolds;
+use super::local::{ActivityParts, LocalFolds};
 use crate::estimate::SingularValues;
 use crate::estimate::{self, AxisMetrics, CrossValidation, EstimateError, Fit, FitOptions, Folds};
 use crate::model::ModelStructure;
@@ -1380,15 +1380,17 @@ pub fn diagnose_chunks(
             acc.push(&extended, c, &mut ws)?;
         }
     }
-    let mut local_tests = set.regions.accumulators(&extended);
+    let mut local_parts = ActivityParts::default();
     let (mut active_ws, mut part_ws) = Default::default();
     for c in validation_data {
         extended
             .assemble(c, &mut ws)
             .map_err(AccumulateError::from)?;
+        let parts = &mut local_parts;
         set.regions
-            .push(c, &ws, &mut local_tests, &mut active_ws, &mut part_ws)?;
+            .push(c, &ws, &extended, parts, &mut active_ws, &mut part_ws)?;
     }
+    let local_tests = set.regions.per_region(&local_parts, &extended)?;
     let folds = Folds::holdout("validation data", fa.clone(), va);
     let local: Vec<LocalFolds> = set
         .regions
