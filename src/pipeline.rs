@@ -2,9 +2,10 @@
 //! statistics (fit data and hold-out validation data), estimate (seed §5), then a
 //! streaming second pass for residual diagnostics and plot series. The text of a log
 //! file is read once: the first pass spills its parsed chunks to a temporary binary file
-//! that the second pass streams back (the `spill` module's docs explain the choice), in segments
-//! of `SEGMENT_CHUNKS` chunks passed on all the log's threads and merged in order
-//! (`pass_log`): results depend on the segment size, never on `--threads`.
+//! that the second pass streams back (the `spill` module's docs explain the choice), in
+//! segments of equal length (`segments`, cut by the log's length alone) passed on all
+//! the log's threads and merged in order (`pass_log`): results never depend on
+//! `--threads`.
 //!
 //! Hold-out: without explicit validation logs, each log's time axis is cut into
 //! contiguous segments of [`Holdout::segment_seconds`] from its first sample, and every
@@ -150,6 +151,8 @@ struct LogStats {
     spill: Option<Spill>,
     /// Time the hold-out segments count from (the first sample's), s.
     t0: Option<f64>,
+    /// Chunks the log was read in.
+    chunks: usize,
 }
 
 /// What the second pass needs to know of a log from the first, in job order.
@@ -159,6 +162,8 @@ struct LogCounts {
     kinds: [u64; 2],
     /// Time the log's hold-out segments count from, s.
     t0: Option<f64>,
+    /// Chunks the log is read in (the same in both passes).
+    chunks: usize,
 }
 
 /// The error of accumulating a chunk of the log `source`.
@@ -209,7 +214,7 @@ fn read_log(
     let mut split = Splitter::new(role, None);
     let mut spill = match source {
         LogSource::File(_) if req.second_pass || req.diagnose.is_some() => {
-            Some(SpillWriter::create(SEGMENT_CHUNKS)?)
+            Some(SpillWriter::create()?)
         }
         _ => None,
     };
@@ -225,7 +230,9 @@ fn read_log(
         acc.push(&req.structure, part, &mut ws)
             .map_err(accumulate_error(source))
     };
+    let mut chunks = 0;
     let summary = stream_log(source, req, share, |chunk| {
+        chunks += 1;
         signals.get_or_insert_with(|| chunk.signals());
         let kinds = split.route(chunk, &mut sink)?;
         if let Some(w) = spill.as_mut() {
@@ -242,6 +249,7 @@ fn read_log(
         signals,
         spill: spill.map(SpillWriter::finish).transpose()?,
         t0: split.t0,
+        chunks,
     })
 }
 
@@ -664,6 +672,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
         .map(|s| LogCounts {
             kinds: [s.fit.count(), s.held_out.count()],
             t0: s.t0,
+            chunks: s.chunks,
         })
         .collect();
     let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit]
@@ -728,10 +737,36 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     Ok(outcome)
 }
 
-/// Chunks per segment of a log's second pass ([`pass_log`]): 64 chunks cut a 1 M-sample
-/// log into 16 segments for the threads to share, while a log of up to 65 536 samples
-/// is one segment.
+/// Most chunks per segment of a log's second pass ([`pass_log`]): a log of up to 64
+/// chunks (65 536 samples) is one segment.
 const SEGMENT_CHUNKS: usize = 64;
+
+/// A longer log is cut into a multiple of this many segments of equal length (to a
+/// chunk), so that 1, 2, 3 or 6 threads finish their last segments together: with
+/// segments of 64 chunks and a short last one, one thread of two idled for up to a
+/// segment at the end (~5 % of a 1 M-sample diagnosed fit).
+const SEGMENT_GROUP: usize = 6;
+
+/// The chunks of each segment of a log of `chunks` chunks, in order: one segment of up to
+/// [`SEGMENT_CHUNKS`], else the fewest multiple of [`SEGMENT_GROUP`] segments of at most
+/// that many, equal to a chunk (the longer first). A function of the length alone, so
+/// results never depend on the thread count.
+fn segments(chunks: usize) -> Vec<std::ops::Range<usize>> {
+    let n = if chunks <= SEGMENT_CHUNKS {
+        1
+    } else {
+        chunks.div_ceil(SEGMENT_CHUNKS * SEGMENT_GROUP) * SEGMENT_GROUP
+    };
+    let (size, longer) = (chunks / n, chunks % n);
+    let mut start = 0;
+    (0..n)
+        .map(|k| {
+            let range = start..start + size + usize::from(k < longer);
+            start = range.end;
+            range
+        })
+        .collect()
+}
 
 /// Points kept per plotted series: buckets of the whole run keep their first sample.
 const PLOT_POINTS: u64 = 4000;
@@ -860,7 +895,13 @@ fn second_pass(
             in_log: [0; 2],
             t0: counts[i].t0,
         };
-        pass_log(&ctx, path, spills[i].as_ref(), role, threads, at)
+        let log = Log {
+            source: path,
+            spill: spills[i].as_ref(),
+            role,
+            chunks: counts[i].chunks,
+        };
+        pass_log(&ctx, &log, threads, at)
     })?;
     let mut residuals: Option<ResidualPass> = None;
     let mut t_offset = [0.0f64; 2];
@@ -978,48 +1019,57 @@ struct Start {
     t0: Option<f64>,
 }
 
-/// The second pass over one log, from its `spill` when there is one, in segments of
-/// [`SEGMENT_CHUNKS`] chunks: each segment is passed from a fresh state (on up to
-/// `threads` threads when read from a spill) and the segments' shares are merged in
-/// order, so the result depends on the segment size only, never on the thread count or
-/// on whether the log came from a file or from memory.
-fn pass_log(
-    ctx: &PassContext,
-    source: &LogSource,
-    spill: Option<&Spill>,
+/// A log as its second pass reads it.
+struct Log<'a> {
+    source: &'a LogSource,
+    /// Its parsed chunks, for a log file.
+    spill: Option<&'a Spill>,
     role: Role,
-    threads: usize,
-    at: Start,
-) -> Result<LogPass, Error> {
+    /// Chunks it is read in (from the first pass).
+    chunks: usize,
+}
+
+/// The second pass over one log, from its spill when there is one, in the segments
+/// [`segments`] cuts: each segment is passed from a fresh state (on up to `threads`
+/// threads when read from a spill) and the segments' shares are merged in order, so the
+/// result depends on the log alone, never on the thread count or on whether the log
+/// came from a file or from memory.
+fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<LogPass, Error> {
+    let (source, role) = (log.source, log.role);
     let mut share = LogPass::empty(ctx);
     let mut append = |part: LogPass| share.append(part).map_err(accumulate_error(source));
-    match spill {
+    let cuts = segments(log.spill.map_or(log.chunks, Spill::chunks));
+    match log.spill {
         Some(spill) => {
-            let segments = spill.segments();
             let pass_segment = |s: usize| {
-                let in_log = segments[s].before;
+                let chunks = cuts[s].clone();
+                let in_log = if chunks.is_empty() {
+                    [0; 2]
+                } else {
+                    spill.before(chunks.start)
+                };
                 let seen = [0, 1].map(|k| at.seen[k] + in_log[k]);
                 let start = Start { seen, in_log, ..at };
                 let mut pass = SegmentPass::new(ctx, source, role, start);
                 // Spilled with its Ω̈ (derived in the first pass).
-                spill.stream_segment(s, |chunk| {
+                spill.stream_chunks(chunks, |chunk| {
                     count_progress(ctx.req, chunk);
                     pass.push(chunk)
                 })?;
                 pass.finish()
             };
-            run_in_order(segments.len(), threads, pass_segment, &mut append)?;
+            run_in_order(cuts.len(), threads, pass_segment, &mut append)?;
         }
         None => {
             let mut pass = SegmentPass::new(ctx, source, role, at);
-            let mut chunks = 0;
+            let (mut read, mut segment) = (0, 0);
             stream_log(source, ctx.req, threads, |chunk| {
-                if chunks == SEGMENT_CHUNKS {
+                if cuts.get(segment).is_some_and(|c| c.end == read) && read > 0 {
                     let next = SegmentPass::new(ctx, source, role, pass.next_start());
                     append(std::mem::replace(&mut pass, next).finish()?)?;
-                    chunks = 0;
+                    segment += 1;
                 }
-                chunks += 1;
+                read += 1;
                 pass.push(chunk)
             })?;
             append(pass.finish()?)?;
@@ -1289,4 +1339,33 @@ fn coloured_variance_inflation(d: &ResidualDiagnostics) -> f64 {
         .fold(0.0_f64, f64::max)
         .min(0.98);
     ((1.0 + rho) / (1.0 - rho)).clamp(1.0, 100.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Segments cover the chunks in order, at most [`SEGMENT_CHUNKS`] each and equal to a
+    /// chunk, in a multiple of [`SEGMENT_GROUP`] once there is more than one.
+    #[test]
+    fn segments_are_equal_to_a_chunk_and_a_multiple_of_six() {
+        assert_eq!(segments(0), vec![0..0]);
+        assert_eq!(segments(64), vec![0..64]);
+        assert_eq!(
+            segments(65),
+            vec![0..11, 11..22, 22..33, 33..44, 44..55, 55..65]
+        );
+        for chunks in [65, 71, 384, 385, 977, 9766] {
+            let cuts = segments(chunks);
+            assert_eq!(cuts.len() % SEGMENT_GROUP, 0, "{chunks}");
+            assert_eq!((cuts[0].start, cuts[cuts.len() - 1].end), (0, chunks));
+            assert!(cuts.windows(2).all(|w| w[0].end == w[1].start));
+            let lens: Vec<usize> = cuts.iter().map(|c| c.len()).collect();
+            let (lo, hi) = (lens.iter().min().unwrap(), lens.iter().max().unwrap());
+            assert!(hi - lo <= 1 && *hi <= SEGMENT_CHUNKS, "{chunks}: {lens:?}");
+        }
+        // The 1 M-sample sweep: 18 segments of 54–55 chunks, where 64-chunk segments left
+        // a 17-chunk last one.
+        assert_eq!(segments(977).len(), 18);
+    }
 }

@@ -24,9 +24,9 @@
 //! leave nothing behind); elsewhere it is removed when its [`Spill`] is dropped, also on
 //! an error or a panic unwinding through the pipeline.
 //!
-//! The chunks are grouped in segments of a fixed number of chunks; the spill keeps where
-//! each segment starts and the caller's tally of the samples before it, so that segments
-//! can be read back independently (on several threads) and their results placed in order.
+//! The spill keeps where each chunk starts and the caller's tally of the samples before
+//! it, so that any run of chunks can be read back on its own (segments of the second
+//! pass, on several threads) and its results placed in order.
 
 use std::fs::{File, OpenOptions};
 use std::io::{BufReader, BufWriter, Read, Write};
@@ -53,18 +53,16 @@ pub(crate) struct Spill {
     path: PathBuf,
     /// Whether the name still has to be removed.
     named: bool,
-    segments: Vec<Segment>,
+    chunks: Vec<Mark>,
 }
 
-/// Where a segment of the spill starts, and what came before it.
+/// Where a chunk of the spill starts, and what came before it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Segment {
-    /// Byte offset of its first chunk.
+struct Mark {
+    /// Byte offset of the chunk.
     offset: u64,
-    /// Chunks in it.
-    chunks: usize,
     /// The writer's caller's tally (e.g. samples of two kinds) over the chunks before it.
-    pub(crate) before: [u64; 2],
+    before: [u64; 2],
 }
 
 impl Drop for Spill {
@@ -99,8 +97,6 @@ pub(crate) struct SpillWriter {
     out: BufWriter<File>,
     spill: Spill,
     bytes: Vec<u8>,
-    /// Chunks per segment.
-    segment_chunks: usize,
     /// Bytes written so far.
     written: u64,
     /// The caller's running tally.
@@ -108,9 +104,8 @@ pub(crate) struct SpillWriter {
 }
 
 impl SpillWriter {
-    /// Creates a new spill file in the temp dir, in segments of `segment_chunks` chunks
-    /// (at least one).
-    pub(crate) fn create(segment_chunks: usize) -> Result<Self, Error> {
+    /// Creates a new spill file in the temp dir.
+    pub(crate) fn create() -> Result<Self, Error> {
         let path = new_path();
         let fail = spill_error(&path);
         let file = OpenOptions::new()
@@ -122,7 +117,7 @@ impl SpillWriter {
             file: Some(File::open(&path).map_err(&fail)?),
             path: path.clone(),
             named: true,
-            segments: Vec::new(),
+            chunks: Vec::new(),
         };
         // Both handles are open: on Unix the name can go now, so that no exit, however
         // abrupt, leaves the file behind.
@@ -131,29 +126,18 @@ impl SpillWriter {
             out: BufWriter::with_capacity(BUFFER_BYTES, file),
             spill,
             bytes: Vec::new(),
-            segment_chunks: segment_chunks.max(1),
             written: 0,
             tally: [0; 2],
         })
     }
 
     /// Appends `chunk`; `tally` is the caller's count of it (e.g. its samples of two
-    /// kinds), summed into each later segment's [`Segment::before`].
+    /// kinds), summed into each later chunk's [`Spill::before`].
     pub(crate) fn write(&mut self, chunk: &SampleChunk, tally: [u64; 2]) -> Result<(), Error> {
-        let segments = &mut self.spill.segments;
-        if segments
-            .last()
-            .is_none_or(|s| s.chunks == self.segment_chunks)
-        {
-            segments.push(Segment {
-                offset: self.written,
-                chunks: 0,
-                before: self.tally,
-            });
-        }
-        if let Some(last) = segments.last_mut() {
-            last.chunks += 1;
-        }
+        self.spill.chunks.push(Mark {
+            offset: self.written,
+            before: self.tally,
+        });
         self.tally = [self.tally[0] + tally[0], self.tally[1] + tally[1]];
         let b = &mut self.bytes;
         b.clear();
@@ -162,8 +146,11 @@ impl SpillWriter {
         }
         for v in vectors(chunk) {
             b.extend_from_slice(&(v.len() as u64).to_le_bytes());
-            for x in v {
-                b.extend_from_slice(&x.to_le_bytes());
+            // Sized once, then filled: one copy loop, no capacity check per value.
+            let at = b.len();
+            b.resize(at + 8 * v.len(), 0);
+            for (d, x) in b[at..].chunks_exact_mut(8).zip(v) {
+                d.copy_from_slice(&x.to_le_bytes());
             }
         }
         self.written += self.bytes.len() as u64;
@@ -208,31 +195,36 @@ fn vectors_mut(c: &mut SampleChunk) -> impl Iterator<Item = &mut Vec<f64>> {
 }
 
 impl Spill {
-    /// The segments, in the order written.
-    pub(crate) fn segments(&self) -> &[Segment] {
-        &self.segments
+    /// Number of chunks written.
+    pub(crate) fn chunks(&self) -> usize {
+        self.chunks.len()
     }
 
-    /// Reads the chunks of segment `s` back in the order written, handing each to
-    /// `consume` (one chunk in memory at a time; positional reads, so segments can be
-    /// read on several threads at once).
-    pub(crate) fn stream_segment(
+    /// The writer's caller's tally over the chunks before chunk `c` (`c` < [`Self::chunks`]).
+    pub(crate) fn before(&self, c: usize) -> [u64; 2] {
+        self.chunks[c].before
+    }
+
+    /// Reads the chunks `range` back in the order written, handing each to `consume`
+    /// (one chunk in memory at a time; positional reads, so ranges can be read on several
+    /// threads at once).
+    pub(crate) fn stream_chunks(
         &self,
-        s: usize,
+        range: std::ops::Range<usize>,
         mut consume: impl FnMut(&mut SampleChunk) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let fail = spill_error(&self.path);
-        let (Some(segment), Some(file)) = (self.segments.get(s), self.file.as_ref()) else {
+        let (Some(first), Some(file)) = (self.chunks.get(range.start), self.file.as_ref()) else {
             return Ok(());
         };
         let at = Positioned {
             file,
-            offset: segment.offset,
+            offset: first.offset,
         };
         let mut input = BufReader::with_capacity(BUFFER_BYTES, at);
         let mut chunk = SampleChunk::default();
         let mut bytes = Vec::new();
-        for _ in 0..segment.chunks {
+        for _ in range.start..range.end.min(self.chunks()) {
             let counts = read_counts(&mut input)
                 .map_err(&fail)?
                 .ok_or_else(|| fail(corrupt("segment ends early")))?;
@@ -353,20 +345,22 @@ mod tests {
             }
             chunks.push(c);
         }
-        let mut writer = SpillWriter::create(2).expect("create");
+        let mut writer = SpillWriter::create().expect("create");
         for (k, c) in chunks.iter().enumerate() {
             writer.write(c, [c.len() as u64, k as u64]).expect("write");
         }
         let spill = writer.finish().expect("finish");
         let path = spill.path.clone();
-        // Two segments (chunks 0–1 and 2), each with the tally of the chunks before it;
+        // Each chunk with the tally of the chunks before it; two runs (chunks 0–1 and 2)
         // read in reverse order to show they stand alone.
-        let before: Vec<[u64; 2]> = spill.segments().iter().map(|s| s.before).collect();
-        assert_eq!(before, vec![[0, 0], [CHUNK_SAMPLES as u64 + 3, 1]]);
+        assert_eq!(spill.chunks(), 3);
+        let before: Vec<[u64; 2]> = (0..3).map(|c| spill.before(c)).collect();
+        let after_first = CHUNK_SAMPLES as u64;
+        assert_eq!(before, vec![[0, 0], [after_first, 0], [after_first + 3, 1]]);
         let mut back = vec![Vec::new(); 2];
-        for s in [1, 0] {
+        for (s, range) in [(1, 2..3), (0, 0..2)] {
             spill
-                .stream_segment(s, |c| {
+                .stream_chunks(range, |c| {
                     back[s].push(c.clone());
                     Ok(())
                 })
@@ -392,7 +386,7 @@ mod tests {
         for k in 0..8 {
             c.push(&sample(k, 4));
         }
-        let mut writer = SpillWriter::create(64).expect("create");
+        let mut writer = SpillWriter::create().expect("create");
         writer.write(&c, [0; 2]).expect("write");
         writer.out.flush().expect("flush");
         writer
@@ -401,7 +395,9 @@ mod tests {
             .set_len(writer.written - 5)
             .expect("truncate");
         let spill = writer.finish().expect("finish");
-        let err = spill.stream_segment(0, |_| Ok(())).expect_err("truncated");
+        let err = spill
+            .stream_chunks(0..1, |_| Ok(()))
+            .expect_err("truncated");
         let text = err.to_string();
         assert!(text.contains("mrsysid-spill-"), "{text}");
     }
@@ -410,7 +406,7 @@ mod tests {
     /// killed process; elsewhere dropping an unfinished spill removes it.
     #[test]
     fn no_spill_file_is_left_behind() {
-        let writer = SpillWriter::create(64).expect("create");
+        let writer = SpillWriter::create().expect("create");
         let path = writer.spill.path.clone();
         assert_eq!(path.exists(), !cfg!(unix));
         drop(writer);

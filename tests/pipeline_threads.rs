@@ -173,10 +173,11 @@ fn long_sweep(name: &str, copies: usize) -> PathBuf {
 
 #[test]
 fn a_log_of_several_second_pass_segments_gives_one_report() {
-    // 72 000 samples: more than one 65 536-sample segment of the second pass, so the
-    // log's second pass runs as two segments (on two threads when it has them) merged
-    // in order. Tolerance zero: the segments are fixed by the sample count, not by the
-    // threads, and a memory log is cut into the same segments.
+    // 72 000 samples (71 chunks): more than one 65 536-sample segment of the second
+    // pass, so the log's second pass runs as six segments of 11–12 chunks (on two
+    // threads when it has them) merged in order. Tolerance zero: the segments are fixed
+    // by the chunk count, not by the threads, and a memory log is cut into the same
+    // segments.
     let file = long_sweep("long-sweep.csv", 36);
     let one = pipeline::run(&request(&[&file], &[], 1)).expect("one thread");
     // 2 s hold-out segments of two samples, every 5th held out: 4/5 of 72 000 fit.
