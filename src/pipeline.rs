@@ -1167,6 +1167,9 @@ struct SegmentState<'a> {
     ws: Workspace,
     active_ws: Workspace,
     part_ws: Workspace,
+    /// The samples the plots keep of a part, and their regressors.
+    plot_rows: SampleChunk,
+    plot_ws: Workspace,
 }
 
 impl<'a> SegmentPass<'a> {
@@ -1184,6 +1187,8 @@ impl<'a> SegmentPass<'a> {
                 ws: Workspace::default(),
                 active_ws: Workspace::default(),
                 part_ws: Workspace::default(),
+                plot_rows: SampleChunk::default(),
+                plot_ws: Workspace::default(),
             },
         }
     }
@@ -1224,7 +1229,7 @@ impl SegmentState<'_> {
         to_validation: bool,
     ) -> Result<(), Error> {
         let k = usize::from(to_validation);
-        let (ctx, req) = (self.ctx, self.ctx.req);
+        let ctx = self.ctx;
         let share = &mut self.share;
         let ws = &mut self.ws;
         let at = |e: AccumulateError| accumulate_error(source)(e.after(self.first[k]));
@@ -1247,10 +1252,7 @@ impl SegmentState<'_> {
                     .map_err(accumulate_error(source))?;
             }
         }
-        // Leaves the base regressors of `part` in `ws` for the plotted predictions.
-        if to_validation {
-            req.structure.assemble(part, ws)?;
-        } else {
+        if !to_validation {
             share.residuals.push(part, ws).map_err(at)?;
         }
         let span = &mut share.span[k];
@@ -1258,20 +1260,39 @@ impl SegmentState<'_> {
             span.0 = part.t[0];
         }
         span.1 = part.t[part.len() - 1];
-        let series = &mut share.series[k];
-        let predicted = req.structure.predict_assembled(ctx.theta, part, ws);
-        for (i, &t) in part.t.iter().enumerate() {
-            if (self.seen[k] + i as u64).is_multiple_of(ctx.strides[k]) {
-                // Absolute time; [`LogPass::times_from_start`] makes it relative.
-                series.t.push(t);
-                for (a, y) in predicted.iter().enumerate() {
-                    series.measured[a].push(part.wrench[a][i]);
-                    series.predicted[a].push(y[i]);
-                }
-            }
-        }
+        self.plot(part, k)?;
         self.seen[k] += part.len() as u64;
         self.in_log[k] += part.len() as u64;
+        Ok(())
+    }
+
+    /// Appends the samples of `part` (of kind `k`) that the plots keep, with their
+    /// predictions: only those samples are assembled (each regressor is a function of
+    /// its own sample, so their values are those of the whole part).
+    fn plot(&mut self, part: &SampleChunk, k: usize) -> Result<(), Error> {
+        let (ctx, stride) = (self.ctx, self.ctx.strides[k]);
+        let seen = self.seen[k];
+        let kept: Vec<usize> = (0..part.len())
+            .filter(|&i| (seen + i as u64).is_multiple_of(stride))
+            .collect();
+        if kept.is_empty() {
+            return Ok(());
+        }
+        let rows = &mut self.plot_rows;
+        rows.clear();
+        rows.extend_from_rows(part, &kept);
+        ctx.req.structure.assemble(rows, &mut self.plot_ws)?;
+        let predicted = ctx
+            .req
+            .structure
+            .predict_assembled(ctx.theta, rows, &self.plot_ws);
+        let series = &mut self.share.series[k];
+        // Absolute time; [`LogPass::times_from_start`] makes it relative.
+        series.t.extend_from_slice(&rows.t);
+        for (a, y) in predicted.into_iter().enumerate() {
+            series.measured[a].extend_from_slice(&rows.wrench[a]);
+            series.predicted[a].extend(y);
+        }
         Ok(())
     }
 }
