@@ -671,8 +671,9 @@ impl ModelStructure {
     }
 
     /// How [`Self::assemble_reusing`] computes the columns j with `wanted[j]` (one entry
-    /// per column): runs of terms that are an earlier wanted column times one more signal
-    /// (a rotor's thrust terms times its wake factor) as that one product.
+    /// per column): runs of terms that are an earlier wanted column's terms, as they are
+    /// or times one more signal (a rotor's thrust terms times its wake factor), as one
+    /// product each.
     pub(crate) fn reuse_plan(&self, wanted: &[bool]) -> Vec<Option<Reuse>> {
         reuse::plan(&self.columns, wanted)
     }

@@ -100,9 +100,14 @@ impl LocalRegions {
             .map_err(AccumulateError::from)?;
         let signals: Vec<&[f64]> = (0..self.len()).map(|k| active_ws.column(k)).collect();
         let patterns = activity_patterns(&signals, &self.thresholds);
-        let mut acting: Vec<u64> = patterns.iter().copied().filter(|&m| m != 0).collect();
+        // The distinct patterns that act, ascending (a handful per chunk).
+        let mut acting: Vec<u64> = Vec::new();
+        for &m in &patterns {
+            if m != 0 && !acting.contains(&m) {
+                acting.push(m);
+            }
+        }
         acting.sort_unstable();
-        acting.dedup();
         let mut rows = Vec::with_capacity(chunk.len());
         for pattern in acting {
             rows.clear();

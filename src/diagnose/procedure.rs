@@ -1068,8 +1068,9 @@ fn cv_score(cv: &CrossValidation, scale: &[[f64; 6]]) -> f64 {
 }
 
 /// Cross-validation scores this close (relative) are one score: the same model to
-/// rounding. Far below any noise bound (κ χ²₁(1 − α) ≥ 2.7 on scores of order one per
-/// held-out axis and fold), far above the rounding of the sums (~1e-16 relative).
+/// rounding. A score is about six times the held-out sample count (each SSE in units of
+/// its mean square), so 1e-12 of it stays far below the noise bound κ χ²₁(1 − α) ≥ 2.7
+/// for any log, and far above the rounding of the sums (~1e-16 relative).
 const SCORE_TIE: f64 = 1e-12;
 
 /// Leaves out terms (a parameter's columns on one axis) of the model with columns `kept`
