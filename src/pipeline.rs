@@ -1062,9 +1062,10 @@ fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<L
         }
         None => {
             let mut pass = SegmentPass::new(ctx, source, role, at);
+            // Chunks read so far, and the segment being passed.
             let (mut read, mut segment) = (0, 0);
             stream_log(source, ctx.req, threads, |chunk| {
-                if cuts.get(segment).is_some_and(|c| c.end == read) && read > 0 {
+                if cuts.get(segment + 1).is_some_and(|next| next.start == read) {
                     let next = SegmentPass::new(ctx, source, role, pass.next_start());
                     append(std::mem::replace(&mut pass, next).finish()?)?;
                     segment += 1;
