@@ -261,7 +261,7 @@ const CHUNKS_IN_FLIGHT: usize = 4;
 /// first pass's critical path: with a worker per thread, the scheduler gives it the time
 /// the reader's checks and derivations and the accumulation leave idle (one worker beside
 /// them on two threads bounded a 1 M-row `fit --no-diagnose` at 1.42–1.53 s, two took
-/// 1.32–1.33 s; BENCHMARKS.md).
+/// 1.32–1.33 s; docs/benchmarks.md).
 fn parse_threads(share: usize) -> usize {
     if share < 2 { 0 } else { share }
 }

@@ -214,7 +214,7 @@ pub(crate) fn vectorized<Op: pulp::WithSimd>(op: Op) -> Op::Output {
 /// instructions; called while the upper register state is dirty (most likely from glibc's
 /// AVX-512 `memmove`, which writes zmm16–31) each call stalls on an SSE/AVX state
 /// transition: measured ~130 ns a call instead of ~6 ns on this project's 2-core Xeon VMs,
-/// 10 % of a diagnosed fit (BENCHMARKS.md, "libm's `exp` unstalled").
+/// 10 % of a diagnosed fit (docs/benchmarks.md, "libm's `exp` unstalled").
 pub(crate) fn exp(x: f64) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") {

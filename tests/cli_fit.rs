@@ -421,7 +421,7 @@ fn fold_r2(d: &serde_json::Value, name: &str, part: &str, axis: usize) -> f64 {
 #[test]
 fn real_neurobem_three_logs_are_cross_validated_log_by_log() {
     // Three real flights: every decision is scored by leaving one log out. Measured
-    // (README "Real data"): pooled cross-validated R² Fz 0.56 -> 0.95, Mx 0.09 -> 0.51,
+    // (docs/real-data.md): pooled cross-validated R² Fz 0.56 -> 0.95, Mx 0.09 -> 0.51,
     // My -0.04 -> 0.55, Mz -0.11 -> 0.02 with Fx, Fy unchanged at 0.93-0.95. The bounds
     // pin that behaviour with a margin of 0.05 for rounding across platforms.
     let v = fit_neurobem("neurobem", &[FIGURE8, MELON, RACETRACK]);

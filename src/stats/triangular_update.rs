@@ -10,7 +10,7 @@
 //! I − V T Vᵀ (compact WY form, two matrix products through faer), so ~2nq² flops per
 //! chunk run mostly in matrix-product kernels. Standard Householder QR: the same
 //! backward stability as faer's `qr_in_place`, at 3–5× its speed on these shapes
-//! (measured in BENCHMARKS.md).
+//! (measured in docs/benchmarks.md).
 
 use faer::linalg::matmul::matmul;
 use faer::prelude::*;
