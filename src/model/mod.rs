@@ -62,15 +62,16 @@
 //! replace Σ y_i² Ω_i by (ℓ²/2) N δt and drop Σ x_i y_i Ω_i and Δν_𝒩, which is exact
 //! only when all rotor speeds are equal.
 
-use crate::mixing::{Mixing, mix_row};
 use crate::sample::{Axis, Sample, SampleChunk};
 use crate::util::{range_of, range_of_slice};
 use crate::vehicle::{ConfigurationClass, Vehicle};
 
+mod evaluate;
 mod options;
 mod reuse;
 mod signals;
 
+use evaluate::{SignalConstants, signal_slice};
 pub use options::{InflowCorrection, ModelOptions, RotorInertiaTerms};
 pub(crate) use reuse::Reuse;
 use signals::in_plane_speed;
@@ -136,17 +137,10 @@ pub struct ModelStructure {
     /// The options the structure was built with.
     pub options: ModelOptions,
     rotor_count: usize,
-    mixing: Mixing,
-    inflow_weights: [Vec<f64>; 5],
     /// Signals any column or known term uses (kept in step with the columns).
     required: Vec<Signal>,
-    /// Rotor radius R and hub height h, m (ground-effect and wake signals).
-    rotor_radius: f64,
-    hub_height: f64,
-    /// Hub positions (x_i, y_i), m, and hover inflow ν0, m/s (wake and vortex-ring
-    /// signals).
-    hubs: Vec<[f64; 2]>,
-    nu0: f64,
+    /// The vehicle constants the computed signals use.
+    constants: SignalConstants,
 }
 
 /// Constants of one vehicle that the Eq. 22 coefficients use.
@@ -240,28 +234,14 @@ impl ModelStructure {
         for col in &mut b.columns {
             col.param = order.iter().position(|&i| i == col.param).expect("present");
         }
-        let rotors = vehicle.rotors();
-        let clean = |w: f64| if w.abs() <= c.tiny { 0.0 } else { w };
-        let inflow_weights = [
-            rotors.iter().map(|r| clean(r.y * r.y)).collect(),
-            rotors.iter().map(|r| clean(r.x * r.y)).collect(),
-            rotors.iter().map(|r| clean(r.x * r.x)).collect(),
-            rotors.iter().map(|r| clean(r.spin * r.y)).collect(),
-            rotors.iter().map(|r| clean(r.spin * r.x)).collect(),
-        ];
         let mut structure = Self {
             params,
             columns: b.columns,
             known,
             options,
             rotor_count: vehicle.rotor_count(),
-            mixing: Mixing::new(vehicle),
-            inflow_weights,
             required: Vec::new(),
-            rotor_radius: props.rotor_radius,
-            hub_height: props.hub_height,
-            hubs: vehicle.rotors().iter().map(|r| [r.x, r.y]).collect(),
-            nu0: c.nu0,
+            constants: SignalConstants::of(vehicle, c.tiny),
         };
         structure.required = structure.collect_required_signals();
         structure
@@ -365,13 +345,8 @@ impl ModelStructure {
             known: self.known.clone(),
             options: self.options,
             rotor_count: self.rotor_count,
-            mixing: self.mixing.clone(),
-            inflow_weights: self.inflow_weights.clone(),
             required: Vec::new(),
-            rotor_radius: self.rotor_radius,
-            hub_height: self.hub_height,
-            hubs: self.hubs.clone(),
-            nu0: self.nu0,
+            constants: self.constants.clone(),
         };
         s.required = s.collect_required_signals();
         s
@@ -495,9 +470,11 @@ impl ModelStructure {
         self.check_chunk(chunk)?;
         let n = chunk.len();
         ws.prepare(n, self.columns.len(), self.required.len());
+        let cap = ws.capacity;
         for (slot, &s) in self.required.iter().enumerate() {
             if !s.is_direct() {
-                self.compute_signal(s, chunk, ws, slot);
+                let dst = &mut ws.signals[slot * cap..slot * cap + n];
+                self.constants.compute(s, chunk, dst);
             }
         }
         let Workspace {
@@ -506,7 +483,6 @@ impl ModelStructure {
             outputs,
             measured,
             motion,
-            capacity,
             ..
         } = ws;
         let range = |v: &[f64]| range_of_slice(&v[..n.min(v.len())]);
@@ -514,7 +490,6 @@ impl ModelStructure {
             motion[k] = range(&chunk.velocity[k]);
             motion[3 + k] = range(&chunk.rates[k]);
         }
-        let cap = *capacity;
         let required = &self.required;
         let lookup = |s: Signal| {
             let slot = required.binary_search(&s).expect("required signal");
@@ -543,128 +518,6 @@ impl ModelStructure {
             }
         }
         Ok(())
-    }
-
-    fn compute_signal(&self, s: Signal, chunk: &SampleChunk, ws: &mut Workspace, slot: usize) {
-        use crate::mixing::VirtualActuator as A;
-        use Signal::*;
-        let n = chunk.len();
-        let cap = ws.capacity;
-        let dst = &mut ws.signals[slot * cap..slot * cap + n];
-        let rows = [A::Thrust, A::Aileron, A::Elevator, A::Rudder];
-        match s {
-            U | V | W | P | Q | R | RotorSpeed(_) | RotorAcceleration(_) => {}
-            Vh => {
-                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
-                for ((d, &a), &b) in dst.iter_mut().zip(u).zip(v) {
-                    *d = in_plane_speed(a, b);
-                }
-            }
-            Dt | Da | De | Dr => {
-                let row = rows[s_index(s, Dt)];
-                mix_row(self.mixing.row(row), &chunk.omega, false, dst);
-            }
-            D2t | D2a | D2e | D2r => {
-                let row = rows[s_index(s, D2t)];
-                mix_row(self.mixing.row(row), &chunk.omega, true, dst);
-            }
-            DrDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst),
-            DrDDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_ddot, false, dst),
-            ActuatorRate(row) => {
-                let row = rows[usize::from(row) % 4];
-                mix_row(self.mixing.row(row), &chunk.omega_dot, false, dst);
-            }
-            SumY2Omega | SumXYOmega | SumX2Omega | SumSigmaYOmega | SumSigmaXOmega => {
-                let w = &self.inflow_weights[s_index(s, SumY2Omega)];
-                mix_row(w, &chunk.omega, false, dst);
-            }
-            AbsU | AbsV | AbsW => {
-                let src = &chunk.velocity[s_index(s, AbsU)][..n];
-                dst.iter_mut().zip(src).for_each(|(d, x)| *d = x.abs());
-            }
-            RotorSpeedSquared(i) => {
-                let src = &chunk.omega[usize::from(i)][..n];
-                dst.iter_mut().zip(src).for_each(|(d, x)| *d = x * x);
-            }
-            SquaredActuatorRate(row) => {
-                dst.fill(0.0);
-                let weights = self.mixing.row(rows[usize::from(row) % 4]);
-                for ((&m, w), wd) in weights.iter().zip(&chunk.omega).zip(&chunk.omega_dot) {
-                    let pairs = w[..n].iter().zip(&wd[..n]);
-                    dst.iter_mut()
-                        .zip(pairs)
-                        .for_each(|(d, (a, b))| *d += 2.0 * m * a * b);
-                }
-            }
-            GroundEffect => {
-                let (r, h) = (self.rotor_radius, self.hub_height);
-                let src = &chunk.height[..n];
-                dst.iter_mut()
-                    .zip(src)
-                    .for_each(|(d, z)| *d = ground_effect_factor(r, z + h));
-            }
-            RotorGroundEffect(i) => {
-                let [x, y] = self.hubs[usize::from(i)];
-                let (r, h) = (self.rotor_radius, self.hub_height);
-                for (k, d) in dst.iter_mut().enumerate() {
-                    // Third row of body→NED: the down component of a body vector.
-                    let down = body_to_ned(chunk, k)[2];
-                    let hub_down = down[0] * x + down[1] * y - down[2] * h;
-                    *d = ground_effect_factor(r, chunk.height[k] - hub_down);
-                }
-            }
-            WakeImmersion(i) => {
-                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
-                let (r, nu0) = (self.rotor_radius, self.nu0);
-                wake_overlaps(&self.hubs, usize::from(i), r, u, v, dst);
-                for (k, d) in dst.iter_mut().enumerate() {
-                    let vh2 = u[k] * u[k] + v[k] * v[k];
-                    *d *= vh2 / (vh2 + nu0 * nu0);
-                }
-            }
-            WakeAdvance(i) => {
-                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
-                let omega = &chunk.omega[usize::from(i)][..n];
-                let r = self.rotor_radius;
-                wake_overlaps(&self.hubs, usize::from(i), r, u, v, dst);
-                for (k, d) in dst.iter_mut().enumerate() {
-                    let vh = in_plane_speed(u[k], v[k]);
-                    *d *= if omega[k] > 0.0 {
-                        vh / (omega[k] * r)
-                    } else {
-                        0.0
-                    };
-                }
-            }
-            UOverVh | VOverVh => {
-                let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
-                let along = if s == UOverVh { u } else { v };
-                for (k, d) in dst.iter_mut().enumerate() {
-                    let vh = in_plane_speed(u[k], v[k]);
-                    *d = if vh > 0.0 { along[k] / vh } else { 0.0 };
-                }
-            }
-            NedToBody(e) => {
-                let (k, j) = (usize::from(e) / 3, usize::from(e) % 3);
-                for (i, d) in dst.iter_mut().enumerate() {
-                    // The NED→body element (k, j) is body→NED's (j, k).
-                    *d = body_to_ned(chunk, i)[j][k];
-                }
-            }
-            VortexRing(i) => {
-                let [x, y] = self.hubs[usize::from(i)];
-                let (u, v, w) = (
-                    &chunk.velocity[0][..n],
-                    &chunk.velocity[1][..n],
-                    &chunk.velocity[2][..n],
-                );
-                let (p, q) = (&chunk.rates[0][..n], &chunk.rates[1][..n]);
-                for (k, d) in dst.iter_mut().enumerate() {
-                    let descent = w[k] + p[k] * y - q[k] * x;
-                    *d = vortex_ring_onset(descent, in_plane_speed(u[k], v[k]), self.nu0);
-                }
-            }
-        }
     }
 
     /// Model output ŷ = Σ `θ[param]` · column for one sample, plus the known terms:
@@ -1134,39 +987,6 @@ fn rotor_inertia_terms(b: &mut Builder, o: ModelOptions, jz: f64) -> [Vec<Term>;
     known
 }
 
-/// Position of a fieldless signal in its block of consecutive variants starting at
-/// `first` (e.g. δa in δt, δa, δe, δr).
-fn s_index(s: Signal, first: Signal) -> usize {
-    let order = [
-        Signal::Dt,
-        Signal::Da,
-        Signal::De,
-        Signal::Dr,
-        Signal::D2t,
-        Signal::D2a,
-        Signal::D2e,
-        Signal::D2r,
-        Signal::SumY2Omega,
-        Signal::SumXYOmega,
-        Signal::SumX2Omega,
-        Signal::SumSigmaYOmega,
-        Signal::SumSigmaXOmega,
-        Signal::AbsU,
-        Signal::AbsV,
-        Signal::AbsW,
-    ];
-    let at = |x| order.iter().position(|&o| o == x).expect("signal in block");
-    at(s) - at(first)
-}
-
-/// Body→NED rotation of sample `k` of `chunk` from its attitude quaternion (normalised).
-fn body_to_ned(chunk: &SampleChunk, k: usize) -> [[f64; 3]; 3] {
-    let q = &chunk.attitude;
-    let quat = [q[0][k], q[1][k], q[2][k], q[3][k]];
-    let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
-    crate::util::quat_to_matrix(quat.map(|c| c / norm))
-}
-
 /// Ground-effect factor g = s/(1 − s), s = (R/(4 z_r))², z_r ≥ R/2 (see
 /// [`Signal::GroundEffect`]).
 pub fn ground_effect_factor(rotor_radius: f64, rotor_height: f64) -> f64 {
@@ -1295,29 +1115,6 @@ impl<'a, L: Fn(Signal) -> &'a [f64]> pulp::WithSimd for AssembleColumns<'_, 'a, 
                 }
             }
         }
-    }
-}
-
-/// The values of signal `s` for the `n` samples of `chunk`; computed signals live at
-/// `offset` in `signals`.
-fn signal_slice<'a>(
-    s: Signal,
-    chunk: &'a SampleChunk,
-    signals: &'a [f64],
-    offset: usize,
-    n: usize,
-) -> &'a [f64] {
-    use Signal::*;
-    match s {
-        U => &chunk.velocity[0][..n],
-        V => &chunk.velocity[1][..n],
-        W => &chunk.velocity[2][..n],
-        P => &chunk.rates[0][..n],
-        Q => &chunk.rates[1][..n],
-        R => &chunk.rates[2][..n],
-        RotorSpeed(i) => &chunk.omega[usize::from(i)][..n],
-        RotorAcceleration(i) => &chunk.omega_dot[usize::from(i)][..n],
-        _ => &signals[offset..offset + n],
     }
 }
 
