@@ -3,8 +3,8 @@
 //! and the candidate signals of [`super::local_effects`], from the vehicle constants they
 //! need ([`SignalConstants`]).
 
+use super::local_effects::{ground_effect_factor, vortex_ring_onset, wake_overlaps};
 use super::signals::{Signal, in_plane_speed};
-use super::{ground_effect_factor, vortex_ring_onset, wake_overlaps};
 use crate::mixing::{Mixing, mix_row};
 use crate::sample::SampleChunk;
 use crate::vehicle::Vehicle;
