@@ -63,7 +63,7 @@
 //! only when all rotor speeds are equal.
 
 use crate::sample::{Axis, Sample, SampleChunk};
-use crate::util::{range_of, range_of_slice};
+use crate::util::range_of_slice;
 use crate::vehicle::{ConfigurationClass, Vehicle};
 
 mod evaluate;
@@ -72,6 +72,7 @@ mod local_effects;
 mod options;
 mod reuse;
 mod signals;
+mod workspace;
 
 use evaluate::{SignalConstants, signal_slice};
 use kernels::{AssembleColumns, apply_term};
@@ -79,6 +80,7 @@ pub use local_effects::ground_effect_factor;
 pub use options::{InflowCorrection, ModelOptions, RotorInertiaTerms};
 pub(crate) use reuse::Reuse;
 pub use signals::{Column, Parameter, Signal, Term, term};
+pub use workspace::Workspace;
 
 /// Why a chunk could not be assembled.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -988,106 +990,6 @@ fn rotor_inertia_terms(b: &mut Builder, o: ModelOptions, jz: f64) -> [Vec<Term>;
         }
     }
     known
-}
-
-/// Reusable column-major buffers for [`ModelStructure::assemble`].
-#[derive(Debug, Clone, Default)]
-pub struct Workspace {
-    signals: Vec<f64>,
-    columns: Vec<f64>,
-    outputs: Vec<f64>,
-    /// Smallest and largest measured output per axis (before the known terms).
-    measured: [(f64, f64); 6],
-    /// Smallest and largest u, v, w, p, q, r.
-    motion: [(f64, f64); 6],
-    capacity: usize,
-    len: usize,
-    n_columns: usize,
-    n_signals: usize,
-}
-
-impl Workspace {
-    /// A workspace with room for `capacity` samples of a structure with `n_columns`
-    /// columns.
-    pub fn new(capacity: usize, n_columns: usize) -> Self {
-        let mut ws = Self::default();
-        ws.prepare(capacity, n_columns, 32);
-        ws.len = 0;
-        ws
-    }
-
-    fn prepare(&mut self, n: usize, n_columns: usize, n_signals: usize) {
-        if n > self.capacity || n_columns > self.n_columns || n_signals > self.n_signals {
-            self.capacity = self.capacity.max(n);
-            self.n_columns = self.n_columns.max(n_columns);
-            self.n_signals = self.n_signals.max(n_signals);
-            self.signals.resize(self.n_signals * self.capacity, 0.0);
-            self.columns.resize(self.n_columns * self.capacity, 0.0);
-            self.outputs.resize(6 * self.capacity, 0.0);
-        }
-        self.len = n;
-    }
-
-    /// Samples in the last assembled chunk.
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    /// True when the last assembled chunk was empty.
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    /// Regressor column `j` of the last assembled chunk.
-    pub fn column(&self, j: usize) -> &[f64] {
-        &self.columns[j * self.capacity..j * self.capacity + self.len]
-    }
-
-    /// Smallest and largest measured output of `axis` (before subtracting the known
-    /// terms) in the last assembled chunk.
-    pub fn measured_range(&self, axis: Axis) -> (f64, f64) {
-        self.measured[axis as usize]
-    }
-
-    /// Smallest and largest of u, v, w, p, q, r (index 0..6) in the last assembled chunk.
-    pub fn motion_range(&self, k: usize) -> (f64, f64) {
-        self.motion[k]
-    }
-
-    /// Rows `rows` (ascending sample indices) of `chunk`, last assembled into `self` with
-    /// `wanted.len()` columns, copied into `into` as if that part of `chunk` alone had
-    /// been assembled: the regressor columns j with `wanted[j]` (the others are left
-    /// unspecified), outputs, and the measured and motion ranges (signals are not
-    /// copied).
-    pub fn gather(&self, chunk: &SampleChunk, rows: &[usize], wanted: &[bool], into: &mut Self) {
-        let m = rows.len();
-        into.prepare(m, wanted.len(), 0);
-        let cap = into.capacity;
-        let pick = |src: &[f64], dst: &mut [f64]| {
-            dst.iter_mut().zip(rows).for_each(|(d, &i)| *d = src[i]);
-        };
-        for j in (0..wanted.len()).filter(|&j| wanted[j]) {
-            pick(self.column(j), &mut into.columns[j * cap..j * cap + m]);
-        }
-        for axis in Axis::ALL {
-            let a = axis as usize;
-            pick(self.output(axis), &mut into.outputs[a * cap..a * cap + m]);
-            into.measured[a] = match chunk.wrench[a].get(..chunk.len()) {
-                Some(z) => range_of(rows.iter().map(|&i| z[i])),
-                None => (0.0, 0.0),
-            };
-        }
-        for k in 0..3 {
-            into.motion[k] = range_of(rows.iter().map(|&i| chunk.velocity[k][i]));
-            into.motion[3 + k] = range_of(rows.iter().map(|&i| chunk.rates[k][i]));
-        }
-    }
-
-    /// Measured output of `axis` minus the known terms, for the last assembled chunk.
-    pub fn output(&self, axis: Axis) -> &[f64] {
-        let a = axis as usize;
-        &self.outputs[a * self.capacity..a * self.capacity + self.len]
-    }
 }
 
 #[cfg(test)]
