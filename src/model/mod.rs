@@ -64,8 +64,8 @@
 
 use crate::sample::{Axis, Sample, SampleChunk};
 use crate::util::range_of_slice;
-use crate::vehicle::{ConfigurationClass, Vehicle};
 
+mod eq22;
 mod evaluate;
 mod kernels;
 mod local_effects;
@@ -148,108 +148,29 @@ pub struct ModelStructure {
     constants: SignalConstants,
 }
 
-/// Constants of one vehicle that the Eq. 22 coefficients use.
-struct Consts {
-    /// ρπR², kg/m.
-    k: f64,
-    r: f64,
-    n: f64,
-    nu0: f64,
-    l2: f64,
-    h: f64,
-    /// Smallest geometric coefficient kept, m² (smaller ones are rounding noise).
-    tiny: f64,
-}
-
-/// Builds columns for one parameter, skipping terms whose coefficient is rounding noise.
-struct Builder {
-    params: Vec<Parameter>,
-    columns: Vec<Column>,
-}
-
-impl Builder {
-    fn param(&mut self, name: &str, unit: &str) -> usize {
-        if let Some(i) = self.params.iter().position(|p| p.name == name) {
-            return i;
-        }
-        self.params.push(Parameter {
-            name: name.into(),
-            unit: unit.into(),
-        });
-        self.params.len() - 1
-    }
-
-    fn col(&mut self, axis: Axis, param: &str, label: &str, terms: Vec<Term>) {
-        let terms: Vec<Term> = terms.into_iter().filter(|t| t.coef != 0.0).collect();
-        if terms.is_empty() {
-            return;
-        }
-        let unit = if param == "J_z" { "kg m^2" } else { "-" };
-        let param = self.param(param, unit);
-        self.columns.push(Column {
-            axis,
-            param,
-            label: label.into(),
-            terms,
-        });
-    }
-}
-
 impl ModelStructure {
-    /// The Eq. 22 structure for `vehicle` with `options`.
-    pub fn eq22(vehicle: &Vehicle, options: ModelOptions) -> Self {
-        let props = &vehicle.props;
-        let r = props.rotor_radius;
-        let l2 = vehicle.arm_length().powi(2);
-        let n = vehicle.rotor_count() as f64;
-        let c = Consts {
-            k: props.air_density * std::f64::consts::PI * r * r,
-            r,
-            n,
-            nu0: vehicle.hover_induced_velocity(),
-            l2,
-            h: props.hub_height,
-            tiny: 1e-12 * n * l2,
-        };
-        let geometry = Geometry::of(vehicle, c.tiny, 1e-12 * n * vehicle.arm_length());
-        let mut b = Builder {
-            params: Vec::new(),
-            columns: Vec::new(),
-        };
-        // The printed case table exists only for Definition 1's classes; a general
-        // planar layout always uses the per-rotor sums.
-        let mut o = options;
-        if vehicle.class() == ConfigurationClass::GeneralPlanar {
-            o.inflow = InflowCorrection::Derived;
-        }
-        in_plane_forces(&mut b, &c, o, &geometry);
-        vertical_force(&mut b, &c, o);
-        roll_pitch_moments(&mut b, &c, o, vehicle.class(), &geometry);
-        yaw_moment(&mut b, &c, o, vehicle.class(), &geometry);
-        let known = rotor_inertia_terms(&mut b, options, props.rotor_inertia);
-        b.columns.sort_by_key(|col| col.axis);
-        // Parameters in order of first appearance by axis, as in Table 5.
-        let mut order: Vec<usize> = Vec::new();
-        for col in &b.columns {
-            if !order.contains(&col.param) {
-                order.push(col.param);
-            }
-        }
-        let params = order.iter().map(|&i| b.params[i].clone()).collect();
-        for col in &mut b.columns {
-            col.param = order.iter().position(|&i| i == col.param).expect("present");
-        }
-        let mut structure = Self {
+    /// A structure of `params` and `columns` (whose `param` indices point into `params`)
+    /// with `known` terms, for a vehicle of `rotor_count` rotors whose signals use
+    /// `constants`.
+    fn from_parts(
+        params: Vec<Parameter>,
+        columns: Vec<Column>,
+        known: [Vec<Term>; 6],
+        options: ModelOptions,
+        rotor_count: usize,
+        constants: SignalConstants,
+    ) -> Self {
+        let mut s = Self {
             params,
-            columns: b.columns,
+            columns,
             known,
             options,
-            rotor_count: vehicle.rotor_count(),
+            rotor_count,
             required: Vec::new(),
-            constants: SignalConstants::of(vehicle, c.tiny),
+            constants,
         };
-        structure.required = structure.collect_required_signals();
-        structure
+        s.required = s.collect_required_signals();
+        s
     }
 
     /// Index of the parameter called `name`.
@@ -344,17 +265,14 @@ impl ModelStructure {
     /// This structure's vehicle, options and known terms with `params` and `columns`
     /// (whose `param` indices point into `params`) instead of its own.
     fn with_columns(&self, params: Vec<Parameter>, columns: Vec<Column>) -> ModelStructure {
-        let mut s = ModelStructure {
+        Self::from_parts(
             params,
             columns,
-            known: self.known.clone(),
-            options: self.options,
-            rotor_count: self.rotor_count,
-            required: Vec::new(),
-            constants: self.constants.clone(),
-        };
-        s.required = s.collect_required_signals();
-        s
+            self.known.clone(),
+            self.options,
+            self.rotor_count,
+            self.constants.clone(),
+        )
     }
 
     /// True for a control-effectiveness column: state-independent and quadratic in the
@@ -588,414 +506,10 @@ impl ModelStructure {
     }
 }
 
-/// Geometric sums of the rotor layout: second moments (m²) and the first moments of a
-/// general planar layout (m), which Assumption 2's symmetry makes zero.
-struct Geometry {
-    sxx: f64,
-    syy: f64,
-    sxy: f64,
-    s_sigma_xx: f64,
-    s_sigma_yy: f64,
-    s_sigma_xy: f64,
-    /// Σ x_i, Σ y_i: N times the rotor centroid's offset from the CG, m.
-    sx: f64,
-    sy: f64,
-    /// Σ σ_i x_i, Σ σ_i y_i: the spin-weighted first moments, m.
-    s_sigma_x: f64,
-    s_sigma_y: f64,
-}
-
-impl Geometry {
-    /// Sums of `vehicle`'s layout; second moments below `tiny` (m²) are rounding noise.
-    /// The first moments are zero for a layout that satisfies Assumption 2 (within its
-    /// tolerance, so an Assumption 2 vehicle keeps the seed's structure) and are taken
-    /// exactly otherwise (rounding noise below `tiny_length`, m, dropped).
-    fn of(vehicle: &Vehicle, tiny: f64, tiny_length: f64) -> Self {
-        let sum = |f: &dyn Fn(&crate::vehicle::Rotor) -> f64, tiny: f64| {
-            let s: f64 = vehicle.rotors().iter().map(f).sum();
-            if s.abs() <= tiny { 0.0 } else { s }
-        };
-        let first = |f: &dyn Fn(&crate::vehicle::Rotor) -> f64| {
-            if vehicle.satisfies_assumption2() {
-                0.0
-            } else {
-                sum(f, tiny_length)
-            }
-        };
-        Self {
-            sxx: sum(&|r| r.x * r.x, tiny),
-            syy: sum(&|r| r.y * r.y, tiny),
-            sxy: sum(&|r| r.x * r.y, tiny),
-            s_sigma_xx: sum(&|r| r.spin * r.x * r.x, tiny),
-            s_sigma_yy: sum(&|r| r.spin * r.y * r.y, tiny),
-            s_sigma_xy: sum(&|r| r.spin * r.x * r.y, tiny),
-            sx: first(&|r| r.x),
-            sy: first(&|r| r.y),
-            s_sigma_x: first(&|r| r.spin * r.x),
-            s_sigma_y: first(&|r| r.spin * r.y),
-        }
-    }
-}
-
-/// Eq. 22a–b: F_x, F_y = ρπR² N {u, v} (−C_H_mub R δt − C_H_mub_mu0 ν0 −
-/// C_H_mub_mu V_h + C_H_mub_muw w), where N w is Σ w_i = N w + p Σy_i − q Σx_i (Eq. 18)
-/// for a general planar layout.
-fn in_plane_forces(b: &mut Builder, c: &Consts, o: ModelOptions, g: &Geometry) {
-    use Signal::*;
-    let kn = c.k * c.n;
-    for (axis, s, name) in [(Axis::Fx, U, "u"), (Axis::Fy, V, "v")] {
-        b.col(
-            axis,
-            "C_H_mub",
-            &format!("{name}*dt"),
-            vec![term(-kn * c.r, &[s, Dt])],
-        );
-        b.col(
-            axis,
-            "C_H_mub_mu0",
-            &format!("{name}*nu0"),
-            vec![term(-kn * c.nu0, &[s])],
-        );
-        if o.linear_vh_terms {
-            b.col(
-                axis,
-                "C_H_mub_mu",
-                &format!("{name}*Vh"),
-                vec![term(-kn, &[s, Vh])],
-            );
-        }
-        b.col(
-            axis,
-            "C_H_mub_muw",
-            &format!("{name}*w"),
-            vec![
-                term(kn, &[s, W]),
-                term(c.k * g.sy, &[s, P]),
-                term(-c.k * g.sx, &[s, Q]),
-            ],
-        );
-    }
-}
-
-/// Eq. 22c: F_z.
-fn vertical_force(b: &mut Builder, c: &Consts, o: ModelOptions) {
-    use Signal::*;
-    let (k, r, n) = (c.k, c.r, c.n);
-    b.col(Axis::Fz, "C_T0", "d2t", vec![term(-k * r * r * n, &[D2t])]);
-    b.col(
-        Axis::Fz,
-        "C_T_mu0",
-        "nu0*dt",
-        vec![term(k * r * n * c.nu0, &[Dt])],
-    );
-    if o.linear_vh_terms {
-        b.col(
-            Axis::Fz,
-            "C_T_mu",
-            "Vh*dt",
-            vec![term(k * r * n, &[Vh, Dt])],
-        );
-    }
-    b.col(Axis::Fz, "C_T_mu2", "Vh^2", vec![term(-k * n, &[Vh, Vh])]);
-    // −C_T_muw R (N w δt − Δν_z), Δν_z = p δa + q δe.
-    b.col(
-        Axis::Fz,
-        "C_T_muw",
-        "N*w*dt - dnu_z",
-        vec![
-            term(-k * r * n, &[W, Dt]),
-            term(k * r, &[P, Da]),
-            term(k * r, &[Q, De]),
-        ],
-    );
-}
-
-/// Eq. 22d–e: M_x and M_y. A general planar layout adds, from the first moments
-/// Σx_i, Σy_i, Σσ_i x_i, Σσ_i y_i: −C_T_mu2 V_h² Σy_i (M_x) and +C_T_mu2 V_h² Σx_i (M_y)
-/// from the thrust's lever arm; ½ C_T_muw R {u, v} Σσ_i w_i in the C_T_muw column from
-/// the hub rolling/pitching moments' inflow term; Σ w_i in the hub-force lever term.
-fn roll_pitch_moments(
-    b: &mut Builder,
-    c: &Consts,
-    o: ModelOptions,
-    class: ConfigurationClass,
-    g: &Geometry,
-) {
-    use Signal::*;
-    let (k, r, n, h) = (c.k, c.r, c.n, c.h);
-    // (axis, rotor-moment velocity, virtual actuator δ, δ², hub-force velocity, sign of
-    // the hub-force moment: M_x gets +h ΣS = h F_y, M_y gets +h ΣH = −h F_x).
-    let axes = [
-        (Axis::Mx, U, Da, D2a, V, 1.0, "a", "u", "v"),
-        (Axis::My, V, De, D2e, U, -1.0, "e", "v", "u"),
-    ];
-    for (axis, vr, d, d2, vh, sign, dn, vrn, vhn) in axes {
-        b.col(
-            axis,
-            "C_R_mub",
-            &format!("{vrn}*dr"),
-            vec![term(k * r * r, &[vr, Dr])],
-        );
-        b.col(
-            axis,
-            "C_T0",
-            &format!("d2{dn}"),
-            vec![term(k * r * r, &[d2])],
-        );
-        b.col(
-            axis,
-            "C_T_mu0",
-            &format!("nu0*d{dn}"),
-            vec![term(-k * r * c.nu0, &[d])],
-        );
-        if o.linear_vh_terms {
-            b.col(
-                axis,
-                "C_T_mu",
-                &format!("Vh*d{dn}"),
-                vec![term(-k * r, &[Vh, d])],
-            );
-        }
-        let mut muw = vec![term(k * r, &[W, d])];
-        muw.extend(inflow_roll_pitch(axis, c, o.inflow, class));
-        // ½ R {u, v} Σσ_i w_i, Σσ_i w_i = p Σσ_i y_i − q Σσ_i x_i (balanced spins).
-        muw.extend([
-            term(0.5 * k * r * g.s_sigma_y, &[vr, P]),
-            term(-0.5 * k * r * g.s_sigma_x, &[vr, Q]),
-        ]);
-        let label = if axis == Axis::Mx {
-            "w*da - dnu_L"
-        } else {
-            "w*de - dnu_M"
-        };
-        b.col(axis, "C_T_muw", label, muw);
-        // Thrust lever arm of the rotor centroid: −Σy_i T_i (M_x), +Σx_i T_i (M_y).
-        let centroid = if axis == Axis::Mx { -g.sy } else { g.sx };
-        let vh2_label = if axis == Axis::Mx {
-            "-Sy*Vh^2"
-        } else {
-            "Sx*Vh^2"
-        };
-        b.col(
-            axis,
-            "C_T_mu2",
-            vh2_label,
-            vec![term(k * centroid, &[Vh, Vh])],
-        );
-        let khn = sign * k * h * n;
-        b.col(
-            axis,
-            "C_H_mub",
-            &format!("h*{vhn}*dt"),
-            vec![term(-khn * r, &[vh, Dt])],
-        );
-        b.col(
-            axis,
-            "C_H_mub_mu0",
-            &format!("h*{vhn}*nu0"),
-            vec![term(-khn * c.nu0, &[vh])],
-        );
-        if o.linear_vh_terms {
-            b.col(
-                axis,
-                "C_H_mub_mu",
-                &format!("h*{vhn}*Vh"),
-                vec![term(-khn, &[vh, Vh])],
-            );
-        }
-        b.col(
-            axis,
-            "C_H_mub_muw",
-            &format!("h*{vhn}*w"),
-            vec![
-                term(khn, &[vh, W]),
-                term(sign * k * h * g.sy, &[vh, P]),
-                term(-sign * k * h * g.sx, &[vh, Q]),
-            ],
-        );
-    }
-}
-
-/// The −ρπR² C_T_muw R Δν_ℒ (M_x) or Δν_ℳ (M_y) terms.
-fn inflow_roll_pitch(
-    axis: Axis,
-    c: &Consts,
-    form: InflowCorrection,
-    class: ConfigurationClass,
-) -> Vec<Term> {
-    use Signal::*;
-    let kr = c.k * c.r;
-    let half = kr * c.l2 / 2.0;
-    let roll = axis == Axis::Mx;
-    match (form, roll) {
-        (InflowCorrection::Derived, true) => {
-            vec![term(-kr, &[P, SumY2Omega]), term(kr, &[Q, SumXYOmega])]
-        }
-        (InflowCorrection::Derived, false) => {
-            vec![term(-kr, &[Q, SumX2Omega]), term(kr, &[P, SumXYOmega])]
-        }
-        (InflowCorrection::Paper, _) => {
-            let (rate, other) = if roll { (P, Q) } else { (Q, P) };
-            let mut t = vec![term(-half * c.n, &[rate, Dt])];
-            match class {
-                // Δν_ℒ = ℓ²/2 p (N δt − δr); Δν_ℳ = ℓ²/2 q (N δt + δr).
-                ConfigurationClass::QuadPlus => {
-                    t.push(term(if roll { half } else { -half }, &[rate, Dr]))
-                }
-                // Δν_ℒ = ℓ²/2 (N p δt + q δr); Δν_ℳ = ℓ²/2 (N q δt + p δr).
-                ConfigurationClass::QuadX => t.push(term(-half, &[other, Dr])),
-                // (A general planar layout never takes the printed table: see `eq22`.)
-                ConfigurationClass::Multirotor6Plus | ConfigurationClass::GeneralPlanar => {}
-            }
-            t
-        }
-    }
-}
-
-/// Eq. 22f: M_z.
-fn yaw_moment(
-    b: &mut Builder,
-    c: &Consts,
-    o: ModelOptions,
-    class: ConfigurationClass,
-    g: &Geometry,
-) {
-    use Signal::*;
-    let (k, r) = (c.k, c.r);
-    let kr2 = k * r * r;
-    b.col(Axis::Mz, "C_Q0", "d2r", vec![term(kr2 * r, &[D2r])]);
-    b.col(
-        Axis::Mz,
-        "C_Q_mu0",
-        "nu0*dr",
-        vec![term(kr2 * c.nu0, &[Dr])],
-    );
-    if o.linear_vh_terms {
-        b.col(Axis::Mz, "C_Q_mu", "Vh*dr", vec![term(kr2, &[Vh, Dr])]);
-    }
-    // −C_Q_muw R² (w δr − Δν_𝒩).
-    let mut muw = vec![term(-kr2, &[W, Dr])];
-    // −C_Q_muw2 R N ℓ² Δν_𝒩².
-    let mut muw2;
-    // C_H_mub_muw: v(pΣxy − qΣx²) − u(pΣy² − qΣxy), printed −½Nℓ²(up + vq).
-    let mut hw;
-    match o.inflow {
-        InflowCorrection::Derived => {
-            muw.extend([
-                term(kr2, &[P, SumSigmaYOmega]),
-                term(-kr2, &[Q, SumSigmaXOmega]),
-            ]);
-            muw2 = vec![
-                term(k * r * g.s_sigma_yy, &[P, P]),
-                term(-2.0 * k * r * g.s_sigma_xy, &[P, Q]),
-                term(k * r * g.s_sigma_xx, &[Q, Q]),
-            ];
-            hw = vec![
-                term(k * g.sxy, &[V, P]),
-                term(-k * g.sxx, &[V, Q]),
-                term(-k * g.syy, &[U, P]),
-                term(k * g.sxy, &[U, Q]),
-            ];
-        }
-        InflowCorrection::Paper => {
-            let knl2 = k * r * c.n * c.l2;
-            match class {
-                ConfigurationClass::QuadPlus => {
-                    muw.extend([term(kr2, &[Q, De]), term(-kr2, &[P, Da])]);
-                    muw2 = vec![term(-knl2 / 2.0, &[P, P]), term(knl2 / 2.0, &[Q, Q])];
-                }
-                ConfigurationClass::QuadX => {
-                    muw.extend([term(-kr2, &[P, De]), term(-kr2, &[Q, Da])]);
-                    muw2 = vec![term(-knl2, &[P, Q])];
-                }
-                ConfigurationClass::Multirotor6Plus | ConfigurationClass::GeneralPlanar => {
-                    muw2 = Vec::new()
-                }
-            }
-            let half = 0.5 * k * c.n * c.l2;
-            hw = vec![term(-half, &[U, P]), term(-half, &[V, Q])];
-        }
-    }
-    // General planar layout: Σσ_i w_i² gains 2w Σσ_i w_i; the H and S forces' lever arms
-    // gain Σy_i u − Σx_i v times their state-only part.
-    muw2.extend([
-        term(2.0 * k * r * g.s_sigma_y, &[W, P]),
-        term(-2.0 * k * r * g.s_sigma_x, &[W, Q]),
-    ]);
-    hw.extend([term(-k * g.sy, &[U, W]), term(k * g.sx, &[V, W])]);
-    b.col(Axis::Mz, "C_Q_muw", "w*dr - dnu_N", muw);
-    b.col(Axis::Mz, "C_Q_muw2", "N*l^2*dnu_N2", muw2);
-    b.col(
-        Axis::Mz,
-        "C_H_mub",
-        "u*da + v*de",
-        vec![term(-k * r, &[U, Da]), term(-k * r, &[V, De])],
-    );
-    b.col(Axis::Mz, "C_H_mub_muw", "l^2*(u*p + v*q)", hw);
-    // The rest of a general planar layout's M_z: −σ_i 𝒬_i's inflow-squared part
-    // R (C_σ/2) Σσ_i Λ_i², Λ_i = ν0 + C_νμ V_h − (1 − C_νw) w_i, gives
-    // −R (2 C_T_muw ν0 + C_Q_mu_muw V_h) Σσ_i w_i; Σ(y_i H_i + x_i S_i) gives
-    // (C_H_mub_mu0 ν0 + C_H_mub_mu V_h)(u Σy_i − v Σx_i).
-    b.col(
-        Axis::Mz,
-        "C_T_muw",
-        "-2*nu0*(p*Ssy - q*Ssx)",
-        vec![
-            term(-2.0 * k * r * c.nu0 * g.s_sigma_y, &[P]),
-            term(2.0 * k * r * c.nu0 * g.s_sigma_x, &[Q]),
-        ],
-    );
-    b.col(
-        Axis::Mz,
-        "C_H_mub_mu0",
-        "nu0*(u*Sy - v*Sx)",
-        vec![term(k * c.nu0 * g.sy, &[U]), term(-k * c.nu0 * g.sx, &[V])],
-    );
-    if o.linear_vh_terms {
-        b.col(
-            Axis::Mz,
-            "C_H_mub_mu",
-            "Vh*(u*Sy - v*Sx)",
-            vec![term(k * g.sy, &[U, Vh]), term(-k * g.sx, &[V, Vh])],
-        );
-        b.col(
-            Axis::Mz,
-            "C_Q_mu_muw",
-            "-Vh*(p*Ssy - q*Ssx)",
-            vec![
-                term(-k * r * g.s_sigma_y, &[Vh, P]),
-                term(k * r * g.s_sigma_x, &[Vh, Q]),
-            ],
-        );
-    }
-}
-
-/// J_z q δr (M_x), −J_z p δr (M_y), J_z δ̇r (M_z): columns of `J_z` or known terms.
-fn rotor_inertia_terms(b: &mut Builder, o: ModelOptions, jz: f64) -> [Vec<Term>; 6] {
-    use Signal::*;
-    let shapes = [
-        (Axis::Mx, "q*dr", term(1.0, &[Q, Dr])),
-        (Axis::My, "-p*dr", term(-1.0, &[P, Dr])),
-        (Axis::Mz, "dr_dot", term(1.0, &[DrDot])),
-    ];
-    let mut known: [Vec<Term>; 6] = Default::default();
-    for (axis, label, t) in shapes {
-        match o.rotor_inertia {
-            RotorInertiaTerms::Estimated => b.col(axis, "J_z", label, vec![t]),
-            RotorInertiaTerms::Known if jz != 0.0 => known[axis as usize].push(Term {
-                coef: jz * t.coef,
-                factors: t.factors,
-            }),
-            _ => {}
-        }
-    }
-    known
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vehicle::{MassAndRotorProperties, Preset};
+    use crate::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 
     fn quad() -> Vehicle {
         let props = MassAndRotorProperties {
