@@ -228,3 +228,110 @@ fn body_to_ned(chunk: &SampleChunk, k: usize) -> [[f64; 3]; 3] {
     let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
     crate::util::quat_to_matrix(quat.map(|c| c / norm))
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::model::{
+        Column, ModelError, ModelOptions, ModelStructure, Parameter, Signal, Workspace, term,
+    };
+    use crate::sample::{Axis, Sample, SampleChunk};
+
+    #[test]
+    fn candidate_signals_evaluate_as_documented() {
+        use Signal::*;
+        let v = super::super::test_quad();
+        let mut s = ModelStructure::eq22(&v, ModelOptions::default());
+        let extra = |axis, label: &str, terms| Column {
+            axis,
+            param: 0,
+            label: label.into(),
+            terms,
+        };
+        let x = s.add_parameter(
+            Parameter {
+                name: "x".into(),
+                unit: "-".into(),
+            },
+            vec![
+                extra(Axis::Fx, "u|u|", vec![term(1.0, &[U, AbsU])]),
+                extra(Axis::Fz, "W3^2", vec![term(2.0, &[RotorSpeedSquared(2)])]),
+                extra(
+                    Axis::My,
+                    "d2e_dot",
+                    vec![term(1.0, &[SquaredActuatorRate(2)])],
+                ),
+                extra(
+                    Axis::Mz,
+                    "g*W1_dot",
+                    vec![term(1.0, &[GroundEffect, RotorAcceleration(0)])],
+                ),
+            ],
+        );
+        let sample = Sample {
+            velocity: [-3.0, 1.0, 0.5],
+            omega: vec![100.0, 200.0, 300.0, 400.0],
+            omega_dot: vec![10.0, 20.0, 30.0, 40.0],
+            height: Some(0.1),
+            ..Sample::default()
+        };
+        let mut chunk = SampleChunk::with_capacity(4, 1, true);
+        chunk.push(&sample);
+        let mut ws = Workspace::default();
+        s.assemble(&chunk, &mut ws).unwrap();
+        let value = |label: &str| {
+            let j = (0..s.columns.len())
+                .find(|&j| s.columns[j].param == x && s.columns[j].label == label)
+                .unwrap();
+            ws.column(j)[0]
+        };
+        assert_eq!(value("u|u|"), -9.0);
+        assert_eq!(value("W3^2"), 2.0 * 300.0 * 300.0);
+        // δ̇²e = Σ x_i 2 Ω_i Ω̇_i, x = ℓ/√2 (1, −1, −1, 1).
+        let arm = 0.25 / 2f64.sqrt();
+        let expect = arm * 2.0 * (100.0 * 10.0 - 200.0 * 20.0 - 300.0 * 30.0 + 400.0 * 40.0);
+        assert!((value("d2e_dot") - expect).abs() < 1e-9 * expect.abs());
+        // Rotor plane 0.15 m up, R = 0.1: s = (0.1/0.6)² = 1/36, g = s/(1 − s) = 1/35.
+        assert!((value("g*W1_dot") - 10.0 / 35.0).abs() < 1e-12);
+        // Wake and vortex-ring onset: rear rotors sit in the front rotors' wakes in
+        // forward flight; descent at ν0 in hover is the centre of the vortex-ring bump.
+        let nu0 = v.hover_induced_velocity();
+        let fwd = Sample {
+            velocity: [10.0, 0.0, nu0],
+            omega: vec![100.0; 4],
+            omega_dot: vec![0.0; 4],
+            height: Some(1.0),
+            ..Sample::default()
+        };
+        let mut c2 = SampleChunk::with_capacity(4, 1, true);
+        c2.push(&fwd);
+        let y = s.add_parameter(
+            Parameter {
+                name: "y".into(),
+                unit: "-".into(),
+            },
+            vec![
+                extra(Axis::Fz, "wake1", vec![term(1.0, &[WakeImmersion(0)])]),
+                extra(Axis::Fz, "wake2", vec![term(1.0, &[WakeImmersion(1)])]),
+                extra(Axis::Fz, "vrs1", vec![term(1.0, &[VortexRing(0)])]),
+            ],
+        );
+        s.assemble(&c2, &mut ws).unwrap();
+        let col = |label: &str| {
+            let j = (0..s.columns.len())
+                .find(|&j| s.columns[j].param == y && s.columns[j].label == label)
+                .unwrap();
+            ws.column(j)[0]
+        };
+        assert_eq!(col("wake1"), 0.0, "front-right rotor is upstream");
+        assert!((col("wake2") - 100.0 / (100.0 + nu0 * nu0)).abs() < 1e-12);
+        let vrs = (-(10.0 / nu0).powi(2)).exp();
+        assert!((col("vrs1") - vrs).abs() < 1e-12);
+        // Without a height signal the ground-effect column cannot be built.
+        let mut no_height = chunk.clone();
+        no_height.height.clear();
+        assert_eq!(
+            s.assemble(&no_height, &mut ws),
+            Err(ModelError::MissingHeight)
+        );
+    }
+}
