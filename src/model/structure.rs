@@ -230,8 +230,10 @@ impl ModelStructure {
 
     /// Checks that `chunk` can be assembled with this structure.
     pub fn check_chunk(&self, chunk: &SampleChunk) -> Result<(), ModelError> {
-        crate::source::check_lengths(chunk)
-            .map_err(|(signal, problem)| ModelError::ChunkShape { signal, problem })?;
+        chunk.check_lengths().map_err(|e| ModelError::ChunkShape {
+            signal: e.signal,
+            problem: e.problem,
+        })?;
         if chunk.rotor_count() != self.rotor_count {
             return Err(ModelError::RotorCountMismatch {
                 expected: self.rotor_count,
