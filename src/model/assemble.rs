@@ -126,7 +126,7 @@ mod tests {
     #[test]
     fn three_factor_terms_and_wanted_columns_assemble_exactly() {
         use Signal::*;
-        let v = super::super::test_quad();
+        let v = crate::model::test_quad();
         let mut s = ModelStructure::eq22(&v, ModelOptions::default());
         let param = s.add_parameter(
             Parameter {

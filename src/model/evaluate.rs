@@ -239,7 +239,7 @@ mod tests {
     #[test]
     fn candidate_signals_evaluate_as_documented() {
         use Signal::*;
-        let v = super::super::test_quad();
+        let v = crate::model::test_quad();
         let mut s = ModelStructure::eq22(&v, ModelOptions::default());
         let extra = |axis, label: &str, terms| Column {
             axis,

@@ -137,7 +137,7 @@ mod tests {
     #[test]
     fn columns_reusing_earlier_columns_assemble_to_rounding() {
         use Signal::*;
-        let v = super::super::test_quad();
+        let v = crate::model::test_quad();
         let mut s = ModelStructure::eq22(&v, ModelOptions::default());
         let column = |label: &str, terms: Vec<Term>| Column {
             axis: Axis::Fz,
