@@ -84,10 +84,6 @@ pub mod vehicle;
 pub use error::Error;
 pub use identified::IdentifiedModel;
 pub use identify::{Identification, Results};
-pub use sample::{Axis, Sample, SampleChunk};
+pub use sample::{Axis, CHUNK_SAMPLES, Sample, SampleChunk};
 pub use source::{LogSource, MemoryLog};
 pub use vehicle::Vehicle;
-
-/// Number of samples per chunk in streaming passes: one place that decides it.
-/// 1024 samples × ~40 regressor columns × 8 bytes stays inside a core's L2 cache.
-pub const CHUNK_SAMPLES: usize = 1024;

@@ -17,7 +17,6 @@ use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
-use crate::CHUNK_SAMPLES;
 use crate::diagnose::local::{ActivityParts, LocalFolds, LocalRegions};
 use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
@@ -31,7 +30,7 @@ use crate::estimate::{
 use crate::io::derive::{JerkScratch, rotor_jerk};
 use crate::io::{self, DeriveOptions, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Reuse, Workspace};
-use crate::sample::{SampleChunk, Signals};
+use crate::sample::{CHUNK_SAMPLES, SampleChunk, Signals};
 use crate::source::LogSource;
 use crate::spill::{Spill, SpillWriter};
 use crate::stats::{AccumulateError, Accumulator, stored_columns_of};

@@ -5,6 +5,10 @@
 //! (rad/s), rotor speeds Ω_i (rad/s, positive), rotor accelerations Ω̇_i (rad/s²),
 //! force F (N) and moment M (N m) on the airframe, gravity excluded.
 
+/// Number of samples per chunk in streaming passes: one place that decides it.
+/// 1024 samples × ~40 regressor columns × 8 bytes stays inside a core's L2 cache.
+pub const CHUNK_SAMPLES: usize = 1024;
+
 /// The six force and moment axes of Eq. 22, in output order.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
@@ -73,6 +77,16 @@ pub struct SampleChunk {
     /// Attitude quaternion body→NED `[qw, qx, qy, qz]`; each vector empty when not
     /// logged.
     pub attitude: [Vec<f64>; 4],
+}
+
+/// A chunk whose signal vectors do not all hold one value per time stamp: the first
+/// such signal and what is wrong ([`SampleChunk::check_lengths`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ChunkShapeError {
+    /// The signal, as the data contract names it (e.g. `omega3`, `qw`, `attitude`).
+    pub signal: String,
+    /// What is wrong, e.g. `1 values for 2 time stamps`.
+    pub problem: String,
 }
 
 impl SampleChunk {
@@ -247,6 +261,85 @@ impl SampleChunk {
                 .then(|| self.attitude.each_ref().map(|v| v[k])),
         }
     }
+
+    /// Checks that every signal vector holds [`Self::len`] values (the optional ones none
+    /// or all); else names the first signal that does not and what is wrong.
+    pub(crate) fn check_lengths(&self) -> Result<(), ChunkShapeError> {
+        let n = self.len();
+        let shape = |signal: String, problem: String| ChunkShapeError { signal, problem };
+        let mut required: Vec<(String, usize)> = Vec::new();
+        for (k, name) in ["u", "v", "w"].iter().enumerate() {
+            required.push((name.to_string(), self.velocity[k].len()));
+        }
+        for (k, name) in ["p", "q", "r"].iter().enumerate() {
+            required.push((name.to_string(), self.rates[k].len()));
+        }
+        for (k, name) in ["fx", "fy", "fz", "mx", "my", "mz"].iter().enumerate() {
+            required.push((name.to_string(), self.wrench[k].len()));
+        }
+        for (i, w) in self.omega.iter().enumerate() {
+            required.push((format!("omega{}", i + 1), w.len()));
+        }
+        let mut optional: Vec<(String, usize)> = Vec::new();
+        if self.has_omega_dot() {
+            if self.omega_dot.len() != self.omega.len() {
+                return Err(shape(
+                    "omega_dot".into(),
+                    format!(
+                        "{} rotor acceleration series for {} rotors",
+                        self.omega_dot.len(),
+                        self.omega.len()
+                    ),
+                ));
+            }
+            for (i, w) in self.omega_dot.iter().enumerate() {
+                required.push((format!("omega_dot{}", i + 1), w.len()));
+            }
+        }
+        if self.has_omega_ddot() {
+            if self.omega_ddot.len() != self.omega.len() {
+                return Err(shape(
+                    "omega_ddot".into(),
+                    format!(
+                        "{} series of rotor-acceleration rates for {} rotors",
+                        self.omega_ddot.len(),
+                        self.omega.len()
+                    ),
+                ));
+            }
+            for (i, w) in self.omega_ddot.iter().enumerate() {
+                required.push((format!("omega_ddot{}", i + 1), w.len()));
+            }
+        }
+        optional.push(("height".into(), self.height.len()));
+        for (k, name) in ["qw", "qx", "qy", "qz"].iter().enumerate() {
+            optional.push((name.to_string(), self.attitude[k].len()));
+        }
+        if self.omega.is_empty() && n > 0 {
+            return Err(shape("omega".into(), "no rotor speed series".into()));
+        }
+        for (name, len) in required {
+            if len != n {
+                return Err(shape(name, format!("{len} values for {n} time stamps")));
+            }
+        }
+        for (name, len) in optional {
+            if len != 0 && len != n {
+                return Err(shape(
+                    name,
+                    format!("{len} values for {n} time stamps (give all or none)"),
+                ));
+            }
+        }
+        let quaternion: Vec<usize> = self.attitude.iter().map(Vec::len).collect();
+        if quaternion.iter().any(|&l| l != quaternion[0]) {
+            return Err(shape(
+                "attitude".into(),
+                "give all four quaternion components or none".into(),
+            ));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -292,6 +385,52 @@ mod tests {
         assert_eq!(by_rows.sample(0), a.sample(3));
         assert_eq!(by_rows.sample(1), a.sample(0));
         assert_eq!(by_rows.sample(2), a.sample(2));
+    }
+
+    /// The length check passes a well-formed chunk and names the first malformed signal
+    /// of one that is not, with what is wrong.
+    #[test]
+    fn check_lengths_names_the_malformed_signal() {
+        let mut c = SampleChunk::with_capacity(2, 2, true);
+        for k in 0..2 {
+            c.push(&Sample {
+                t: k as f64,
+                omega: vec![100.0; 2],
+                omega_dot: vec![0.0; 2],
+                ..Sample::default()
+            });
+        }
+        assert_eq!(c.check_lengths(), Ok(()));
+        let shape = |signal: &str, problem: &str| {
+            Err(ChunkShapeError {
+                signal: signal.into(),
+                problem: problem.into(),
+            })
+        };
+        let mut short = c.clone();
+        short.omega[1].pop();
+        assert_eq!(
+            short.check_lengths(),
+            shape("omega2", "1 values for 2 time stamps")
+        );
+        let mut partial = c.clone();
+        partial.height = vec![1.0];
+        assert_eq!(
+            partial.check_lengths(),
+            shape("height", "1 values for 2 time stamps (give all or none)")
+        );
+        let mut three = c.clone();
+        three.attitude[..3].fill(vec![0.0; 2]);
+        assert_eq!(
+            three.check_lengths(),
+            shape("attitude", "give all four quaternion components or none")
+        );
+        let mut rotors = c.clone();
+        rotors.omega_dot.pop();
+        assert_eq!(
+            rotors.check_lengths(),
+            shape("omega_dot", "1 rotor acceleration series for 2 rotors")
+        );
     }
 }
 

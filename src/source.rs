@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use crate::io::error::{ErrorKind, IoError, Location, display_name};
 use crate::io::validate::QUATERNION_NORM_TOLERANCE;
-use crate::sample::{Sample, SampleChunk, Signals};
+use crate::sample::{CHUNK_SAMPLES, Sample, SampleChunk, Signals};
 
 /// One log of a fit: a file, or samples in memory.
 #[derive(Debug, Clone)]
@@ -79,7 +79,7 @@ impl MemoryLog {
             expected.check(name, k as u64, &s)?;
             let c = chunk.get_or_insert_with(|| expected.chunk());
             c.push(&s);
-            if c.len() == crate::CHUNK_SAMPLES {
+            if c.len() == CHUNK_SAMPLES {
                 log.append(chunk.take().expect("chunk in progress"))?;
             }
         }
@@ -144,12 +144,12 @@ impl MemoryLog {
                 kind,
             )
         };
-        check_lengths(&c).map_err(|(field, m)| {
+        c.check_lengths().map_err(|e| {
             IoError::new(
                 &self.name,
                 Location::Sample(first),
-                Some(format!("signal {field:?}")),
-                ErrorKind::Format(m),
+                Some(format!("signal {:?}", e.signal)),
+                ErrorKind::Format(e.problem),
             )
         })?;
         if let Some(prev) = self.chunks.last() {
@@ -176,7 +176,7 @@ trait Expected {
 
 impl Expected for Signals {
     fn chunk(self) -> SampleChunk {
-        SampleChunk::with_capacity(self.rotors, crate::CHUNK_SAMPLES, self.omega_dot)
+        SampleChunk::with_capacity(self.rotors, CHUNK_SAMPLES, self.omega_dot)
     }
 
     fn check(self, name: &str, k: u64, s: &Sample) -> Result<(), IoError> {
@@ -225,84 +225,6 @@ impl Expected for Signals {
         presence(s.height.is_some(), self.height, "height")?;
         presence(s.attitude.is_some(), self.attitude, "attitude")
     }
-}
-
-/// Every signal vector of `c` holds `c.len()` values (optional ones none or all);
-/// else the signal and what is wrong.
-pub(crate) fn check_lengths(c: &SampleChunk) -> Result<(), (String, String)> {
-    let n = c.len();
-    let mut required: Vec<(String, usize)> = Vec::new();
-    for (k, name) in ["u", "v", "w"].iter().enumerate() {
-        required.push((name.to_string(), c.velocity[k].len()));
-    }
-    for (k, name) in ["p", "q", "r"].iter().enumerate() {
-        required.push((name.to_string(), c.rates[k].len()));
-    }
-    for (k, name) in ["fx", "fy", "fz", "mx", "my", "mz"].iter().enumerate() {
-        required.push((name.to_string(), c.wrench[k].len()));
-    }
-    for (i, w) in c.omega.iter().enumerate() {
-        required.push((format!("omega{}", i + 1), w.len()));
-    }
-    let mut optional: Vec<(String, usize)> = Vec::new();
-    if c.has_omega_dot() {
-        if c.omega_dot.len() != c.omega.len() {
-            return Err((
-                "omega_dot".into(),
-                format!(
-                    "{} rotor acceleration series for {} rotors",
-                    c.omega_dot.len(),
-                    c.omega.len()
-                ),
-            ));
-        }
-        for (i, w) in c.omega_dot.iter().enumerate() {
-            required.push((format!("omega_dot{}", i + 1), w.len()));
-        }
-    }
-    if c.has_omega_ddot() {
-        if c.omega_ddot.len() != c.omega.len() {
-            return Err((
-                "omega_ddot".into(),
-                format!(
-                    "{} series of rotor-acceleration rates for {} rotors",
-                    c.omega_ddot.len(),
-                    c.omega.len()
-                ),
-            ));
-        }
-        for (i, w) in c.omega_ddot.iter().enumerate() {
-            required.push((format!("omega_ddot{}", i + 1), w.len()));
-        }
-    }
-    optional.push(("height".into(), c.height.len()));
-    for (k, name) in ["qw", "qx", "qy", "qz"].iter().enumerate() {
-        optional.push((name.to_string(), c.attitude[k].len()));
-    }
-    if c.omega.is_empty() && n > 0 {
-        return Err(("omega".into(), "no rotor speed series".into()));
-    }
-    for (name, len) in required {
-        if len != n {
-            return Err((name, format!("{len} values for {n} time stamps")));
-        }
-    }
-    for (name, len) in optional {
-        if len != 0 && len != n {
-            return Err((
-                name,
-                format!("{len} values for {n} time stamps (give all or none)"),
-            ));
-        }
-    }
-    let quaternion: Vec<usize> = c.attitude.iter().map(Vec::len).collect();
-    if quaternion.iter().any(|&l| l != quaternion[0]) {
-        return Err((
-            "attitude".into(),
-            "give all four quaternion components or none".into(),
-        ));
-    }
-    Ok(())
 }
 
 /// `c` carries the same rotor count and optional signals as `prev`.
@@ -392,7 +314,7 @@ mod tests {
 
     #[test]
     fn samples_are_chunked_and_checked_at_the_boundary() {
-        let n = crate::CHUNK_SAMPLES + 5;
+        let n = CHUNK_SAMPLES + 5;
         let log = MemoryLog::from_samples("mem", (0..n).map(|k| sample(k as f64 * 0.01, 4)))
             .expect("valid samples");
         assert_eq!(log.len(), n as u64);
@@ -401,7 +323,7 @@ mod tests {
                 .iter()
                 .map(SampleChunk::len)
                 .collect::<Vec<_>>(),
-            [crate::CHUNK_SAMPLES, 5]
+            [CHUNK_SAMPLES, 5]
         );
         // Three rotor speeds in a four-rotor log, named by sample index.
         let bad = (0..10).map(|k| sample(k as f64, if k == 7 { 3 } else { 4 }));

@@ -33,9 +33,8 @@ use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::CHUNK_SAMPLES;
 use crate::error::Error;
-use crate::sample::SampleChunk;
+use crate::sample::{CHUNK_SAMPLES, SampleChunk};
 
 /// Buffer of the spill writer and reader, bytes.
 const BUFFER_BYTES: usize = 1 << 18;

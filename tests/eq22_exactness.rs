@@ -152,7 +152,7 @@ fn mirror_image_is_the_same_model_with_spins_reversed() {
 
 #[test]
 fn printed_case_table_is_not_exact_for_either_spin_assignment_of_a_quad() {
-    // The seed's printed Δν table mixes the two spin assignments (see model.rs docs):
+    // The seed's printed Δν table mixes the two spin assignments (see model/mod.rs docs):
     // for quadrotor× and quadrotor+, whichever assignment we pick, one moment axis
     // misses by far more than rounding. Forces and the other moments stay exact.
     let mut rng = StdRng::seed_from_u64(8);
@@ -314,7 +314,7 @@ fn random_props(rng: &mut StdRng) -> MassAndRotorProperties {
 }
 
 /// The general planar model (first moments Σx_i, Σy_i, Σσ_i x_i, Σσ_i y_i kept, see
-/// `model.rs`) equals the independent per-rotor sum to 1e-10 for asymmetric ×, H-frame
+/// `model/mod.rs`) equals the independent per-rotor sum to 1e-10 for asymmetric ×, H-frame
 /// and irregular hexa layouts, both spin assignments, with and without the terms linear
 /// in V_h (without them for C_νμ = 0, where they vanish). Power: the same data against the seed's structure (the layout declared as
 /// Assumption 2 by a loose geometry tolerance, so the first moments are taken as zero)

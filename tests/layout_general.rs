@@ -166,7 +166,7 @@ fn seed_view(v: &Vehicle) -> Vehicle {
 /// 1500-point response-surface sweep of the asymmetric × (1200 fit, 300 validate) is
 /// fitted by the general-layout model and by the seed's structure (the same rotor table
 /// with the first moments taken as zero). The asymmetry acts on M_z (Σσ_i y_i ≠ 0: the
-/// yaw terms of `model.rs`); the general model must cut the validation NRMSE of M_z by
+/// yaw terms of `model/eq22`); the general model must cut the validation NRMSE of M_z by
 /// ≥ 10 % (measured: 5.8 % → 5.0 %; the rest is the torque's small-angle error) and
 /// lose nothing on the other axes (≤ 3 % relative change; measured ≤ 1 %), and
 /// C_Q_mu_muw must take the closed form's sign (C_νμ < 0 for this inflow plane) at

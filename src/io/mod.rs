@@ -44,8 +44,7 @@ use validate::{
     QUATERNION_NORM_TOLERANCE, SPIKE_HALF_WINDOW, UnitStats, is_spike, physical_range, spike_floor,
 };
 
-use crate::CHUNK_SAMPLES;
-use crate::sample::SampleChunk;
+use crate::sample::{CHUNK_SAMPLES, SampleChunk};
 use crate::util::quat_to_matrix;
 use crate::vehicle::Vehicle;
 

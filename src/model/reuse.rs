@@ -122,3 +122,96 @@ fn proportional(run: &[Term], base: &[Term], signal: Option<Signal>) -> Option<f
     });
     (same && ratio.is_finite() && ratio != 0.0).then_some(ratio)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{ModelOptions, ModelStructure, Parameter, Workspace, term};
+    use crate::sample::{Axis, Sample, SampleChunk};
+
+    /// A column made of an earlier column's terms times a signal (a rotor's thrust times
+    /// its wake factor), or of an earlier column's terms as they are (M_z from the F_x and
+    /// F_y in-plane force columns), is assembled from that column, with the same values to
+    /// rounding; a run whose coefficients are not proportional, or an earlier column not
+    /// assembled, is not reused.
+    #[test]
+    fn columns_reusing_earlier_columns_assemble_to_rounding() {
+        use Signal::*;
+        let v = crate::model::test_quad();
+        let mut s = ModelStructure::eq22(&v, ModelOptions::default());
+        let column = |label: &str, terms: Vec<Term>| Column {
+            axis: Axis::Fz,
+            param: 0,
+            label: label.into(),
+            terms,
+        };
+        let a = vec![term(2.0, &[U, W]), term(3.0, &[V])];
+        let times_p = vec![term(4.0, &[U, W, P]), term(6.0, &[V, P]), term(1.5, &[Q])];
+        let scaled = vec![term(0.7, &[R]), term(-1.0, &[U, W]), term(-1.5, &[V])];
+        let not_proportional = vec![term(4.0, &[U, W, P]), term(7.0, &[V, P])];
+        let param = s.add_parameter(
+            Parameter {
+                name: "x".into(),
+                unit: "-".into(),
+            },
+            vec![
+                column("a", a),
+                column("a*p + q", times_p),
+                column("r - a/2", scaled),
+                column("not a*p", not_proportional),
+            ],
+        );
+        let first = (0..s.columns.len())
+            .find(|&j| s.columns[j].param == param)
+            .expect("the added columns");
+        let all = vec![true; s.columns.len()];
+        let plan = s.reuse_plan(&all);
+        let run = |signal, ratio| Run {
+            column: first,
+            signal,
+            ratio,
+        };
+        let reuse = |runs, terms| {
+            Some(Reuse {
+                runs: vec![runs],
+                terms,
+            })
+        };
+        assert_eq!(plan[first + 1], reuse(run(Some(P), 2.0), vec![2]));
+        assert_eq!(plan[first + 2], reuse(run(None, -0.5), vec![0]));
+        assert_eq!(plan[first + 3], None);
+        let mut without_a = all.clone();
+        without_a[first] = false;
+        assert_eq!(s.reuse_plan(&without_a)[first + 1], None);
+
+        let mut chunk = SampleChunk::with_capacity(4, 64, true);
+        for k in 0..64 {
+            let f = k as f64;
+            chunk.push(&Sample {
+                velocity: [0.3 * f - 7.1, 1.0 / (f + 3.0), (0.1 * f).sin()],
+                rates: [0.01 * f - 0.2, (0.2 * f).cos(), -0.5],
+                omega: vec![400.0 + 3.7 * f; 4],
+                omega_dot: vec![1.0; 4],
+                ..Sample::default()
+            });
+        }
+        let (mut terms, mut reused) = (Workspace::default(), Workspace::default());
+        s.assemble(&chunk, &mut terms).unwrap();
+        s.assemble_reusing(&chunk, &mut reused, &all, &plan)
+            .unwrap();
+        for (j, how) in plan.iter().enumerate() {
+            let (x, y) = (terms.column(j), reused.column(j));
+            // The same terms summed in another order: a few roundings of the largest.
+            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for k in 0..64 {
+                assert!(
+                    (x[k] - y[k]).abs() <= 8.0 * f64::EPSILON * scale,
+                    "column {j}, sample {k}"
+                );
+            }
+            if how.is_none() {
+                assert_eq!(x, y, "column {j} is assembled term by term");
+            }
+        }
+    }
+}

@@ -454,7 +454,9 @@ impl BladeElementRotor {
         model: &super::inflow::InflowModel,
         state: &mut super::inflow::InflowState,
     ) -> HubLoads {
-        let nu = super::inflow::solve(self, kin, model, state);
+        let thrust = |nu: f64| -self.loads_at_inflow(kin, nu, true).force[2];
+        let (rho, area) = (self.air_density, self.disk_area());
+        let nu = super::inflow::solve(kin.hub_velocity, rho, area, thrust, model, state);
         self.loads_at_inflow(kin, nu, false)
     }
 }

@@ -21,8 +21,6 @@
 //! 0.5–1.5 ν_h) momentum theory itself is unreliable and the thrust loss observed there is
 //! modelled by the `vortex_ring` effect ([`super::effects`]).
 
-use super::blade_element::{BladeElementRotor, RotorKinematics};
-
 /// How a rotor's induced velocity is obtained.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum InflowModel {
@@ -49,14 +47,19 @@ pub struct InflowState {
 /// Relative tolerance of the inflow iteration (on ν, relative to max(ν, 0.1 m/s)).
 pub const INFLOW_TOLERANCE: f64 = 1e-10;
 
-/// Induced velocity ν (m/s) of `rotor` at `kin` under `model`.
+/// Induced velocity ν (m/s) under `model` of a rotor with disc area `disk_area` (m²) in
+/// air of density `air_density` (kg/m³), whose hub moves at `hub_velocity` (m/s, body
+/// axes, relative to the air) and whose thrust at inflow ν is `thrust(ν)` (N; the
+/// simulator's rotors pass their blade-element thrust).
 pub fn solve(
-    rotor: &BladeElementRotor,
-    kin: &RotorKinematics,
+    hub_velocity: [f64; 3],
+    air_density: f64,
+    disk_area: f64,
+    thrust: impl Fn(f64) -> f64,
     model: &InflowModel,
     state: &mut InflowState,
 ) -> f64 {
-    let [vx, vy, w] = kin.hub_velocity;
+    let [vx, vy, w] = hub_velocity;
     let vh = vx.hypot(vy);
     let nu = match *model {
         InflowModel::Plane {
@@ -65,8 +68,7 @@ pub fn solve(
             c_nu_w,
         } => nu0 + c_nu_mu * vh + c_nu_w * w,
         InflowModel::Momentum => {
-            let k = 1.0 / (2.0 * rotor.air_density * rotor.disk_area());
-            let thrust = |nu: f64| -rotor.loads_at_inflow(kin, nu, true).force[2];
+            let k = 1.0 / (2.0 * air_density * disk_area);
             let fixed_point = |nu: f64| momentum_root(k * thrust(nu), vh, w);
             let mut a = state.nu.unwrap_or_else(|| fixed_point(0.0) * 0.6);
             let mut ra = a - fixed_point(a);
