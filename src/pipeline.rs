@@ -31,6 +31,7 @@ use crate::io::derive::{JerkScratch, rotor_jerk};
 use crate::io::{self, DeriveOptions, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Reuse, Workspace};
 use crate::sample::{CHUNK_SAMPLES, SampleChunk, Signals};
+use crate::slow::SlowThrust;
 use crate::source::LogSource;
 use crate::spill::{Spill, SpillWriter};
 use crate::stats::{AccumulateError, Accumulator, stored_columns_of};
@@ -277,22 +278,18 @@ fn stream_log(
     source: &LogSource,
     req: &FitRequest,
     share: usize,
-    mut consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
+    consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
 ) -> Result<Summary, Error> {
-    let mut jerk = JerkScratch::default();
-    let mut feed = |chunk: &mut SampleChunk| {
-        rotor_jerk(chunk, &jerk_options(req), &mut jerk);
-        count_progress(req, chunk);
-        consume(chunk)
-    };
+    let mut feed = Feed::new(req, consume);
     let path = match source {
         LogSource::File(path) => path,
         LogSource::Memory(log) => {
             let mut cut = Rechunker::default();
             for chunk in log.chunks() {
-                cut.push(chunk, &mut feed)?;
+                cut.push(chunk, &mut |c| feed.push(c))?;
             }
-            cut.finish(&mut feed)?;
+            cut.finish(&mut |c| feed.push(c))?;
+            feed.finish()?;
             return Ok(Summary::of_memory(log.name(), log.len()));
         }
     };
@@ -300,8 +297,9 @@ fn stream_log(
         let mut reader = open(path, req, 0)?;
         reader.join_segments();
         while let Some(chunk) = reader.next_chunk_mut() {
-            feed(chunk?)?;
+            feed.push(chunk?)?;
         }
+        feed.finish()?;
         return Ok(reader.summary().clone());
     }
     let (tx, rx) = std::sync::mpsc::sync_channel(CHUNKS_IN_FLIGHT);
@@ -331,7 +329,7 @@ fn stream_log(
         let mut consumed = Ok(());
         while let Ok(chunk) = rx.recv() {
             consumed = chunk.map_err(Error::from).and_then(|mut c| {
-                feed(&mut c)?;
+                feed.push(&mut c)?;
                 c.clear();
                 // The reader may have finished already; the chunk is then dropped.
                 let _ = recycle.send(c);
@@ -345,8 +343,59 @@ fn stream_log(
         let summary = producer
             .join()
             .unwrap_or_else(|_| Err(RequestError::WorkerStopped.into()));
-        consumed.and(summary)
+        consumed
+            .and(summary)
+            .and_then(|s| feed.finish().map(|()| s))
     })
+}
+
+/// What happens to each chunk of a log before its consumer sees it: Ω̈ derived from Ω̇
+/// ([`rotor_jerk`]), progress counted and, for a diagnosis, the slow rotor thrusts of
+/// the trim-moment candidates filled in ([`SlowThrust`]; chunks then reach the consumer
+/// up to a few seconds of samples later, in order, the last ones at [`Feed::finish`]).
+struct Feed<'r, C> {
+    req: &'r FitRequest,
+    jerk: JerkScratch,
+    slow: Option<SlowThrust>,
+    consume: C,
+}
+
+impl<'r, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'r, C> {
+    fn new(req: &'r FitRequest, consume: C) -> Self {
+        Self {
+            req,
+            jerk: JerkScratch::default(),
+            slow: None,
+            consume,
+        }
+    }
+
+    fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
+        rotor_jerk(chunk, &jerk_options(self.req), &mut self.jerk);
+        let (req, consume) = (self.req, &mut self.consume);
+        let mut deliver = |c: &SampleChunk| {
+            count_progress(req, c);
+            consume(c)
+        };
+        if req.diagnose.is_none() {
+            return deliver(chunk);
+        }
+        let rotors = chunk.rotor_count();
+        let stage = self.slow.get_or_insert_with(|| SlowThrust::new(rotors));
+        // A copy is held: the reader's chunk goes back to it.
+        stage.push(chunk.clone(), |c| deliver(&c))
+    }
+
+    fn finish(&mut self) -> Result<(), Error> {
+        let (req, consume) = (self.req, &mut self.consume);
+        match self.slow.as_mut() {
+            Some(stage) => stage.finish(|c| {
+                count_progress(req, &c);
+                consume(&c)
+            }),
+            None => Ok(()),
+        }
+    }
 }
 
 /// Differentiator of the rates of rotor acceleration ([`rotor_jerk`], on the re-cut

@@ -69,6 +69,11 @@ pub struct SampleChunk {
     /// Ω̇ by the fit pipeline ([`crate::io::derive::rotor_jerk`]), never read from a
     /// log; empty when not derived.
     pub omega_ddot: Vec<Vec<f64>>,
+    /// Slow part of each rotor's Ω_i², rad²/s²: its zero-phase low-pass at each cut-off
+    /// of [`crate::TRIM_BANDS_HZ`], band-major (band b, rotor i at `b · N + i`).
+    /// Derived by the fit pipeline for the diagnosis's trim-moment candidates, never read
+    /// from a log; empty when not derived.
+    pub omega_squared_slow: Vec<Vec<f64>>,
     /// Measured force F_x, F_y, F_z (N) and moment M_x, M_y, M_z (N m), body axes,
     /// gravity excluded, in [`Axis`] order.
     pub wrench: [Vec<f64>; 6],
@@ -104,6 +109,7 @@ impl SampleChunk {
                 Vec::new()
             },
             omega_ddot: Vec::new(),
+            omega_squared_slow: Vec::new(),
             wrench: [v(), v(), v(), v(), v(), v()],
             height: Vec::new(),
             attitude: Default::default(),
@@ -135,6 +141,11 @@ impl SampleChunk {
         !self.omega_ddot.is_empty()
     }
 
+    /// True when the slow parts of the rotors' Ω² are present.
+    pub fn has_omega_squared_slow(&self) -> bool {
+        !self.omega_squared_slow.is_empty()
+    }
+
     /// True when the CG height is present.
     pub fn has_height(&self) -> bool {
         !self.height.is_empty()
@@ -152,6 +163,7 @@ impl SampleChunk {
             rotors: self.rotor_count(),
             omega_dot: self.has_omega_dot(),
             omega_ddot: self.has_omega_ddot(),
+            omega_squared_slow: self.has_omega_squared_slow(),
             height: self.has_height(),
             attitude: self.has_attitude(),
         }
@@ -165,6 +177,7 @@ impl SampleChunk {
         self.omega.iter_mut().for_each(Vec::clear);
         self.omega_dot.iter_mut().for_each(Vec::clear);
         self.omega_ddot.iter_mut().for_each(Vec::clear);
+        self.omega_squared_slow.iter_mut().for_each(Vec::clear);
         self.wrench.iter_mut().for_each(Vec::clear);
         self.height.clear();
         self.attitude.iter_mut().for_each(Vec::clear);
@@ -237,6 +250,7 @@ impl SampleChunk {
         rotors(&mut self.omega, &src.omega);
         rotors(&mut self.omega_dot, &src.omega_dot);
         rotors(&mut self.omega_ddot, &src.omega_ddot);
+        rotors(&mut self.omega_squared_slow, &src.omega_squared_slow);
         for (d, s) in self.wrench.iter_mut().zip(&src.wrench) {
             append(d, s);
         }
@@ -309,6 +323,22 @@ impl SampleChunk {
             }
             for (i, w) in self.omega_ddot.iter().enumerate() {
                 required.push((format!("omega_ddot{}", i + 1), w.len()));
+            }
+        }
+        if self.has_omega_squared_slow() {
+            let bands = crate::slow::TRIM_BANDS_HZ.len();
+            if self.omega_squared_slow.len() != bands * self.omega.len() {
+                return Err(shape(
+                    "omega_squared_slow".into(),
+                    format!(
+                        "{} slow thrust series for {} rotors in {bands} bands",
+                        self.omega_squared_slow.len(),
+                        self.omega.len()
+                    ),
+                ));
+            }
+            for (i, w) in self.omega_squared_slow.iter().enumerate() {
+                required.push((format!("omega_squared_slow{}", i + 1), w.len()));
             }
         }
         optional.push(("height".into(), self.height.len()));
@@ -444,6 +474,8 @@ pub struct Signals {
     pub omega_dot: bool,
     /// Rates of the rotor accelerations Ω̈_i present (derived by the fit pipeline).
     pub omega_ddot: bool,
+    /// Slow parts of the rotors' Ω² present (derived by the fit pipeline).
+    pub omega_squared_slow: bool,
     /// CG height present.
     pub height: bool,
     /// Attitude quaternion present.
@@ -478,6 +510,7 @@ impl Sample {
             rotors: self.omega.len(),
             omega_dot: !self.omega_dot.is_empty(),
             omega_ddot: false,
+            omega_squared_slow: false,
             height: self.height.is_some(),
             attitude: self.attitude.is_some(),
         }

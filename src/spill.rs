@@ -14,10 +14,11 @@
 //! more than its CSV text: 2 GB of temp space for 10 M rows), memory copies through the
 //! page cache instead of tokenising and ~21 float parses per sample. The rates of rotor
 //! acceleration Ω̈ derived in the first pass are spilled too: reading 32 B per sample
-//! back costs less than differentiating again.
+//! back costs less than differentiating again; so are the slow rotor thrusts of a
+//! diagnosis (96 B per sample of a quad×), which need seconds of samples around each.
 //!
-//! Format: per chunk, three little-endian u32 (the series counts of rotor speed,
-//! acceleration and its rate), then every vector of the [`SampleChunk`] in field order,
+//! Format: per chunk, four little-endian u32 (the series counts of rotor speed,
+//! acceleration, its rate and slow thrust), then every vector of the [`SampleChunk`] in field order,
 //! each as a little-endian u64 length followed by that many little-endian f64. The file
 //! lives in [`std::env::temp_dir`] (`TMPDIR`). On Unix its name is removed as soon as it
 //! is open (the space is freed when the process ends, however it ends: Ctrl-C or a kill
@@ -39,8 +40,9 @@ use crate::sample::{CHUNK_SAMPLES, SampleChunk};
 /// Buffer of the spill writer and reader, bytes.
 const BUFFER_BYTES: usize = 1 << 18;
 
-/// Most rotor series a chunk read back may claim (guards against a corrupted file).
-const MAX_ROTORS: u32 = 64;
+/// Most rotor series a chunk read back may claim, 64 rotors in every band (guards
+/// against a corrupted file).
+const MAX_ROTORS: u32 = 64 * crate::slow::TRIM_BANDS_HZ.len() as u32;
 
 /// A spill file; removes it when dropped.
 #[derive(Debug)]
@@ -140,7 +142,12 @@ impl SpillWriter {
         self.tally = [self.tally[0] + tally[0], self.tally[1] + tally[1]];
         let b = &mut self.bytes;
         b.clear();
-        for series in [&chunk.omega, &chunk.omega_dot, &chunk.omega_ddot] {
+        for series in [
+            &chunk.omega,
+            &chunk.omega_dot,
+            &chunk.omega_ddot,
+            &chunk.omega_squared_slow,
+        ] {
             b.extend_from_slice(&(series.len() as u32).to_le_bytes());
         }
         for v in vectors(chunk) {
@@ -175,6 +182,7 @@ fn vectors(c: &SampleChunk) -> impl Iterator<Item = &Vec<f64>> {
         .chain(&c.omega)
         .chain(&c.omega_dot)
         .chain(&c.omega_ddot)
+        .chain(&c.omega_squared_slow)
         .chain(&c.wrench)
         .chain(std::iter::once(&c.height))
         .chain(&c.attitude)
@@ -188,6 +196,7 @@ fn vectors_mut(c: &mut SampleChunk) -> impl Iterator<Item = &mut Vec<f64>> {
         .chain(&mut c.omega)
         .chain(&mut c.omega_dot)
         .chain(&mut c.omega_ddot)
+        .chain(&mut c.omega_squared_slow)
         .chain(&mut c.wrench)
         .chain(std::iter::once(&mut c.height))
         .chain(&mut c.attitude)
@@ -252,16 +261,16 @@ impl Read for Positioned<'_> {
     }
 }
 
-/// The three rotor-series counts (Ω, Ω̇, Ω̈) opening a chunk; `None` at the end of the
-/// file.
-fn read_counts(input: &mut impl Read) -> std::io::Result<Option<[usize; 3]>> {
-    let mut head = [0u8; 12];
+/// The four rotor-series counts (Ω, Ω̇, Ω̈, slow Ω²) opening a chunk; `None` at the end
+/// of the file.
+fn read_counts(input: &mut impl Read) -> std::io::Result<Option<[usize; 4]>> {
+    let mut head = [0u8; 16];
     let got = input.read(&mut head[..1])?;
     if got == 0 {
         return Ok(None);
     }
     input.read_exact(&mut head[1..])?;
-    let mut counts = [0; 3];
+    let mut counts = [0; 4];
     for (count, b) in counts.iter_mut().zip(head.chunks_exact(4)) {
         let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
         if n > MAX_ROTORS {
@@ -275,13 +284,14 @@ fn read_counts(input: &mut impl Read) -> std::io::Result<Option<[usize; 3]>> {
 /// Reads one chunk's vectors into `chunk` (its allocations reused); `bytes` is scratch.
 fn read_chunk(
     input: &mut impl Read,
-    [omega, omega_dot, omega_ddot]: [usize; 3],
+    [omega, omega_dot, omega_ddot, slow]: [usize; 4],
     chunk: &mut SampleChunk,
     bytes: &mut Vec<u8>,
 ) -> std::io::Result<()> {
     chunk.omega.resize_with(omega, Vec::new);
     chunk.omega_dot.resize_with(omega_dot, Vec::new);
     chunk.omega_ddot.resize_with(omega_ddot, Vec::new);
+    chunk.omega_squared_slow.resize_with(slow, Vec::new);
     for v in vectors_mut(chunk) {
         let mut len = [0u8; 8];
         input.read_exact(&mut len)?;
@@ -335,11 +345,20 @@ mod tests {
                 c.push(&sample(k, rotors));
             }
             if rotors == 6 {
-                // Derived rates of rotor acceleration travel with the chunk.
+                // Derived rates of rotor acceleration and slow thrusts travel with the
+                // chunk.
                 c.omega_ddot = c
                     .omega
                     .iter()
                     .map(|w| w.iter().map(|x| -x).collect())
+                    .collect();
+                c.omega_squared_slow = (0..crate::slow::TRIM_BANDS_HZ.len() * rotors)
+                    .map(|i| {
+                        c.omega[i % rotors]
+                            .iter()
+                            .map(|x| x * x + i as f64)
+                            .collect()
+                    })
                     .collect();
             }
             chunks.push(c);

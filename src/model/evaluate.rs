@@ -73,6 +73,17 @@ impl SignalConstants {
                 let row = rows[s_index(s, D2t)];
                 mix_row(self.mixing.row(row), &chunk.omega, true, dst);
             }
+            SlowSquaredActuator(band, row) => {
+                let rotors = chunk.rotor_count();
+                let start = usize::from(band) * rotors;
+                let slow = &chunk.omega_squared_slow[start..start + rotors];
+                mix_row(
+                    self.mixing.row(rows[usize::from(row) % 4]),
+                    slow,
+                    false,
+                    dst,
+                );
+            }
             DrDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst),
             DrDDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_ddot, false, dst),
             ActuatorRate(row) => {

@@ -99,6 +99,10 @@ pub enum Signal {
     UOverVh,
     /// ∂V_h/∂v = v/V_h, dimensionless (0 at V_h = 0).
     VOverVh,
+    /// Slow part of δ² = M_ix Ω² for one row of Eq. 20 (second index: 0 δt, 1 δa, 2 δe,
+    /// 3 δr): M_ix,row times the rotors' slow Ω² in band `band` (first index) of
+    /// [`crate::TRIM_BANDS_HZ`] (derived by the fit pipeline), in the unit of that δ².
+    SlowSquaredActuator(u8, u8),
     /// Element (k, j) of the NED→body rotation, index 3k + j (body axis k, NED axis j),
     /// dimensionless; needs the attitude signals.
     NedToBody(u8),

@@ -36,6 +36,11 @@ pub enum ModelError {
         "the model needs rates of the rotor accelerations (the J_z * dr_ddot term of a rotor-speed delay) but the data has none; they are derived from omega_dot by the fit pipeline"
     )]
     MissingRotorAccelerationRate,
+    /// The model has a trim-moment term but the data has no slow rotor thrust.
+    #[error(
+        "the model needs the slow part of the rotor thrust (a trim-moment term) but the data has none; it is derived from the rotor speeds of a whole log by the fit pipeline, so it cannot be predicted sample by sample"
+    )]
+    MissingSlowThrust,
     /// A chunk whose signal vectors do not all hold one value per time stamp.
     #[error("malformed sample chunk: signal {signal:?}: {problem}")]
     ChunkShape {
@@ -245,6 +250,13 @@ impl ModelStructure {
         }
         if self.required.contains(&Signal::DrDDot) && !chunk.has_omega_ddot() {
             return Err(ModelError::MissingRotorAccelerationRate);
+        }
+        let slow = self
+            .required
+            .iter()
+            .any(|s| matches!(s, Signal::SlowSquaredActuator(..)));
+        if slow && !chunk.has_omega_squared_slow() {
+            return Err(ModelError::MissingSlowThrust);
         }
         let per_rotor_ground = self
             .required
