@@ -9,8 +9,8 @@
 //!
 //! To add an effect: write its file here with a
 //! `pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate>`, name a new
-//! [`super::EffectKind`] for it, and add one line to [`LIBRARY`]. Nothing else in the
-//! diagnosis knows effects by name.
+//! [`super::EffectKind`] for it, and add one line to the list `LIBRARY` below. Nothing
+//! else in the diagnosis knows effects by name.
 
 mod accelerometer_bias;
 mod cg_height;

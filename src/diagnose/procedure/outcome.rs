@@ -87,6 +87,8 @@ pub enum Rejection {
         required: f64,
     },
     /// The model already holds [`DiagnoseOptions::max_generic`] generic-pool terms.
+    ///
+    /// [`DiagnoseOptions::max_generic`]: crate::diagnose::DiagnoseOptions::max_generic
     GenericLimit {
         /// The limit.
         limit: usize,
@@ -200,6 +202,8 @@ pub struct Diagnosis {
     /// One sentence per effect added, with what the data cannot tell it from.
     pub findings: Vec<String>,
     /// The search stopped at [`DiagnoseOptions::max_effects`] with candidates left.
+    ///
+    /// [`DiagnoseOptions::max_effects`]: crate::diagnose::DiagnoseOptions::max_effects
     pub stopped_at_limit: bool,
     /// Terms left out of the final model (of Eq. 22 or added), in order.
     pub unsupported: Vec<Unsupported>,
