@@ -231,7 +231,7 @@ fn main() {
             let named: Vec<&str> = d
                 .effects_added
                 .iter()
-                .filter(|e| !e.kind.is_model_completion())
+                .filter(|e| !e.role.is_model_completion())
                 .map(|e| e.name.as_str())
                 .collect();
             let found = case.expected.is_some_and(|e| named.contains(&e));

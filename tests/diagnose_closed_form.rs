@@ -192,7 +192,7 @@ fn unnamed_structure_is_found_by_the_generic_pool() {
 fn first_effect(d: &mrsysid::diagnose::Diagnosis) -> &mrsysid::diagnose::CandidateScore {
     d.effects_added
         .iter()
-        .find(|e| !e.kind.is_model_completion())
+        .find(|e| !e.role.is_model_completion())
         .unwrap_or_else(|| panic!("no effect added: {:#?}", d.steps[0].ranking))
 }
 

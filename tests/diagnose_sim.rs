@@ -61,7 +61,7 @@ fn run_with(effects: &[&str], seed: u64, options: &DiagnoseOptions) -> Diagnosis
 fn first_effect(d: &Diagnosis) -> &mrsysid::diagnose::CandidateScore {
     d.effects_added
         .iter()
-        .find(|e| !e.kind.is_model_completion())
+        .find(|e| !e.role.is_model_completion())
         .unwrap_or_else(|| panic!("no effect added: {:#?}", d.steps.last().map(|s| &s.ranking)))
 }
 
@@ -147,7 +147,7 @@ fn two_effects_at_once_are_both_found() {
     let names: Vec<&str> = d
         .effects_added
         .iter()
-        .filter(|e| !e.kind.is_model_completion())
+        .filter(|e| !e.role.is_model_completion())
         .map(|e| e.name.as_str())
         .collect();
     assert!(
@@ -172,7 +172,7 @@ fn clean_sweeps_get_no_undeclared_effect() {
         let effects: Vec<&str> = d
             .effects_added
             .iter()
-            .filter(|e| e.kind != EffectKind::Generic && !e.kind.is_model_completion())
+            .filter(|e| e.kind != EffectKind::Generic && !e.role.is_model_completion())
             .map(|e| e.name.as_str())
             .collect();
         assert!(effects.is_empty(), "seed {seed}: {effects:?}");
@@ -181,7 +181,7 @@ fn clean_sweeps_get_no_undeclared_effect() {
         let beyond: Vec<&str> = d
             .effects_added
             .iter()
-            .filter(|e| !e.kind.is_model_completion())
+            .filter(|e| !e.role.is_model_completion())
             .map(|e| e.name.as_str())
             .collect();
         assert!(beyond.len() <= 1, "seed {seed}: {beyond:?}");

@@ -19,15 +19,16 @@
 //!    `min_drop`; it joins the basis, and the axis is screened again, up to
 //!    `per_axis` monomials.
 //!
-//! Survivors become ordinary candidates of kind [`EffectKind::Generic`]: they are
-//! accumulated over the full data with the named candidates and must pass the same
-//! significance, plausibility and validation tests, after every named candidate that
-//! passes (named effects are preferred whenever they explain as much).
+//! Survivors become ordinary candidates of kind [`EffectKind::Generic`] (role
+//! [`Role::Generic`]): they are accumulated over the full data with the named candidates
+//! and must pass the same significance, plausibility and validation tests, after every
+//! named candidate that passes (named effects are preferred whenever they explain as
+//! much).
 //!
 //! Each survivor's column is the monomial divided by its RMS on the screening sample, so
 //! its parameter reads in the axis unit: the load at one RMS of the monomial.
 
-use super::candidates::{Candidate, CandidateParameter, EffectKind};
+use super::candidate::{Candidate, CandidateParameter, EffectKind, Role};
 use crate::model::{Column, ModelError, ModelStructure, Parameter, Signal, Workspace, term};
 use crate::sample::{Axis, SampleChunk};
 use crate::util::{dot, map_on_threads};
@@ -383,22 +384,23 @@ impl Screened {
     /// The survivor as a candidate effect of kind [`EffectKind::Generic`].
     pub fn candidate(&self) -> Candidate {
         let name = format!("generic {} {}", self.axis, self.label);
-        Candidate {
-            kind: EffectKind::Generic,
-            activity: None,
-            name: name.clone(),
-            physics: "Residual structure no named effect explains: a product of states, virtual actuators and rotor-local sums, estimated as the load at one RMS of the product.",
-            parameters: vec![CandidateParameter {
-                name: format!("g_{}_{}", self.axis, self.label.replace('*', "_")),
-                unit: self.axis.unit().to_string(),
-                columns: vec![Column {
-                    axis: self.axis,
-                    param: 0,
-                    label: format!("{}/{:.4e}", self.label, self.rms),
-                    terms: vec![term(1.0 / self.rms, &self.factors)],
-                }],
+        let parameter = CandidateParameter::new(
+            format!("g_{}_{}", self.axis, self.label.replace('*', "_")),
+            self.axis.unit(),
+            vec![Column {
+                axis: self.axis,
+                param: 0,
+                label: format!("{}/{:.4e}", self.label, self.rms),
+                terms: vec![term(1.0 / self.rms, &self.factors)],
             }],
-        }
+        );
+        Candidate::new(
+            EffectKind::Generic,
+            Role::Generic,
+            name,
+            "Residual structure no named effect explains: a product of states, virtual actuators and rotor-local sums, estimated as the load at one RMS of the product.",
+            vec![parameter],
+        )
     }
 }
 

@@ -2,27 +2,17 @@
 //! the wake of other rotors, in descent near the hover inflow speed) are judged on the
 //! held-out samples where they act, not diluted over a whole log.
 //!
-//! A candidate with an [`Activity`] gets a second set of held-out statistics, accumulated
+//! A candidate with an [`Activity`](super::Activity) gets a second set of held-out statistics, accumulated
 //! over only the samples where its activity signal reaches the threshold; its validation
 //! gain is then measured there ([`LocalFolds`]), with the training statistics of the
 //! ordinary folds.
 
 use crate::estimate::Folds;
-use crate::model::{Column, ModelStructure, Parameter, Term, Workspace};
+use crate::model::{Column, ModelStructure, Parameter, Workspace};
 use crate::sample::{Axis, SampleChunk};
 use crate::stats::{AccumulateError, Accumulator};
 
-use super::candidates::Candidate;
-
-/// The part of the envelope where a candidate acts: samples whose activity (a sum of
-/// signal products, dimensionless) reaches `threshold`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Activity {
-    /// Activity signal of one sample, e.g. the Cheeseman–Bennett thrust gain.
-    pub terms: Vec<Term>,
-    /// Smallest activity that counts as acting.
-    pub threshold: f64,
-}
+use super::candidate::Candidate;
 
 /// The local candidates of a candidate set and the structure that evaluates their
 /// activity signals (one column each).

@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::diagnose::{CandidateScore, Diagnosis};
+use crate::diagnose::{CandidateScore, Diagnosis, Reading, Role};
 use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
 use crate::model::{ModelOptions, ModelStructure};
 use crate::sample::Axis;
@@ -167,6 +167,11 @@ pub struct EffectParameterRow {
     pub std: f64,
     /// Unit.
     pub unit: String,
+    /// How the estimate reads (a fraction is printed in %, a freed moment coefficient
+    /// with its tie to the force). Not in the JSON, whose schema this does not change: a
+    /// report read back from JSON prints every estimate as a plain value.
+    #[serde(skip)]
+    pub reading: Reading,
 }
 
 /// One step of the diagnosis.
@@ -191,9 +196,9 @@ impl From<&CandidateScore> for EffectRow {
     fn from(c: &CandidateScore) -> Self {
         Self {
             name: c.name.clone(),
-            model_completion: c.kind.is_model_completion(),
-            generic: c.kind == crate::diagnose::EffectKind::Generic,
-            unspecific: c.kind.is_unspecific(),
+            model_completion: c.role.is_model_completion(),
+            generic: c.role == Role::Generic,
+            unspecific: c.role.is_unspecific(),
             axes: c.axes.clone(),
             parameters: c
                 .parameters
@@ -203,6 +208,7 @@ impl From<&CandidateScore> for EffectRow {
                     estimate: p.estimate,
                     std: p.std,
                     unit: p.unit.clone(),
+                    reading: p.reading,
                 })
                 .collect(),
             validation_gain: c.validation_gain.to_vec(),

@@ -7,6 +7,7 @@
 use std::fmt::Write;
 
 use super::summary::{AxisRow, DiagnosisReport, FsoaReport, Report};
+use crate::diagnose::Reading;
 
 /// All tables, as printed by `mrsysid fit`.
 pub fn render(report: &Report) -> String {
@@ -106,7 +107,7 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
         let _ = writeln!(out, "  {what}: {} (axes {})", e.name, axes.join(", "));
         for p in &e.parameters {
             // A freed moment coefficient is estimated as moment value − force value.
-            let tie = if p.name.contains('@') {
+            let tie = if p.reading == Reading::MomentMinusForce {
                 format!(
                     " (moment value - force value: {:.1} sigma)",
                     p.estimate / p.std
@@ -118,7 +119,7 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
                 out,
                 "    {} = {}{tie}",
                 p.name,
-                with_unit(&p.name, p.estimate, p.std, &p.unit)
+                with_unit(p.reading, p.estimate, p.std, &p.unit)
             );
         }
     }
@@ -165,9 +166,9 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
 }
 
 /// `estimate ± std unit`, in mm for lengths, ms for times, % for fractional changes
-/// (`*_scale`, `*_loss` parameters) and fixed decimals for speeds and accelerations.
-fn with_unit(name: &str, x: f64, s: f64, unit: &str) -> String {
-    let fraction = name.contains("scale") || name.contains("loss");
+/// ([`Reading::Fraction`]) and fixed decimals for speeds and accelerations.
+fn with_unit(reading: Reading, x: f64, s: f64, unit: &str) -> String {
+    let fraction = reading == Reading::Fraction;
     match unit {
         "-" if fraction => format!("{:+.2} ± {:.2} %", 100.0 * x, 100.0 * s),
         "m" => format!("{:.2} ± {:.2} mm", 1e3 * x, 1e3 * s),

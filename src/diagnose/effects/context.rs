@@ -1,0 +1,260 @@
+//! What the library needs to build candidates, and the shared pieces of their columns.
+//!
+//! Columns that scale a rotor's thrust or torque use the per-rotor thrust T̂_i and
+//! torque Q̂_i of the fitted base model (the Eq. 22 terms of one rotor with the base
+//! estimates θ̂), so a parameter reads directly as a fraction ("rotor 3 thrust −7.9 %")
+//! or a physical quantity (m, m², s).
+
+use crate::model::{Column, ModelStructure, Signal, Term, term};
+use crate::sample::Axis;
+use crate::vehicle::{Rotor, Vehicle};
+
+/// One load of a thrust change: (axis, rotor i's signed lever arm in m (1 for the force),
+/// label prefix of the sum).
+pub(super) type ThrustLoad = (Axis, fn(&Rotor) -> f64, &'static str);
+
+/// The loads of a change ΔT_i of rotor i's thrust (along −z_B, Eq. 13–15):
+/// F_z = −Σ ΔT_i, M_x = −Σ y_i ΔT_i, M_y = Σ x_i ΔT_i.
+pub(super) const THRUST_LOADS: [ThrustLoad; 3] = [
+    (Axis::Fz, |_| -1.0, "-Sum "),
+    (Axis::Mx, |r| -r.y, "-Sum y_i*"),
+    (Axis::My, |r| r.x, "Sum x_i*"),
+];
+
+/// What the library needs to know to build candidates.
+pub struct CandidateContext<'a> {
+    /// The vehicle.
+    pub vehicle: &'a Vehicle,
+    /// The base (Eq. 22) structure.
+    pub structure: &'a ModelStructure,
+    /// Base estimates, one per `structure.params`.
+    pub theta: &'a [f64],
+    /// The data log CG height (ground-effect candidate).
+    pub has_height: bool,
+    /// The data has rotor accelerations (delay candidate).
+    pub has_omega_dot: bool,
+    /// The data has rates of the rotor accelerations (the delay's reaction-torque term).
+    pub has_omega_ddot: bool,
+    /// The data has the attitude (steady-wind candidate).
+    pub has_attitude: bool,
+}
+
+impl CandidateContext<'_> {
+    /// The base estimate of parameter `name`; 0 when the structure lacks it (a variant
+    /// without that term, e.g. no linear V_h terms: its contribution is then zero).
+    pub(super) fn theta(&self, name: &str) -> f64 {
+        self.structure
+            .param_index(name)
+            .map_or(0.0, |i| self.theta[i])
+    }
+
+    /// ρπR², kg/m.
+    pub(super) fn k(&self) -> f64 {
+        let p = &self.vehicle.props;
+        p.air_density * std::f64::consts::PI * p.rotor_radius.powi(2)
+    }
+
+    /// Terms of rotor `i`'s thrust T̂_i (N) from the base estimates, each multiplied by
+    /// `extra` signals and `scale`. With `rate`, the terms of dT̂_i/dΩ_i · Ω̇_i (N/s).
+    pub(super) fn rotor_thrust(
+        &self,
+        i: usize,
+        extra: &[Signal],
+        scale: f64,
+        rate: bool,
+    ) -> Vec<Term> {
+        use Signal::*;
+        let r = self.vehicle.props.rotor_radius;
+        let nu0 = self.vehicle.hover_induced_velocity();
+        let rotor = self.vehicle.rotors()[i];
+        let (w, w2, wd) = rotor_signals(i);
+        let k = self.k() * scale;
+        let mut t = if rate {
+            // d/dt of the Ω-dependent terms: 2Ω Ω̇ and Ω̇.
+            vec![
+                term(2.0 * k * self.theta("C_T0") * r * r, &[w, wd]),
+                term(-k * self.theta("C_T_mu0") * r * nu0, &[wd]),
+                term(-k * self.theta("C_T_mu") * r, &[Vh, wd]),
+                term(k * self.theta("C_T_muw") * r, &[W, wd]),
+                term(k * self.theta("C_T_muw") * r * rotor.y, &[P, wd]),
+                term(-k * self.theta("C_T_muw") * r * rotor.x, &[Q, wd]),
+            ]
+        } else {
+            vec![
+                term(k * self.theta("C_T0") * r * r, &[w2]),
+                term(k * self.theta("C_T_mu2"), &[Vh, Vh]),
+                term(-k * self.theta("C_T_mu0") * r * nu0, &[w]),
+                term(-k * self.theta("C_T_mu") * r, &[Vh, w]),
+                term(k * self.theta("C_T_muw") * r, &[W, w]),
+                term(k * self.theta("C_T_muw") * r * rotor.y, &[P, w]),
+                term(-k * self.theta("C_T_muw") * r * rotor.x, &[Q, w]),
+            ]
+        };
+        t.retain(|t| t.coef != 0.0);
+        for x in &mut t {
+            x.factors.extend_from_slice(extra);
+        }
+        t
+    }
+
+    /// Terms of rotor `i`'s in-plane force along body x (`along_x`) or y, N, from the
+    /// base estimates, times `scale`: rotor i's share of Eq. 22a–b at its hub's in-plane
+    /// velocity (u − r y_i, v + r x_i) (Eq. 17, the yaw rate's share that Assumption 4
+    /// drops included), ρπR² u_i (−C_H_mub R Ω_i − C_H_mub_mu0 ν0 − C_H_mub_mu V_h +
+    /// C_H_mub_muw w_i), w_i = w + p y_i − q x_i its hub's axial velocity (Eq. 18).
+    pub(super) fn rotor_in_plane_force(&self, i: usize, along_x: bool, scale: f64) -> Vec<Term> {
+        use Signal::*;
+        let r = self.vehicle.props.rotor_radius;
+        let nu0 = self.vehicle.hover_induced_velocity();
+        let rotor = self.vehicle.rotors()[i];
+        let (w, _, _) = rotor_signals(i);
+        let muw = self.theta("C_H_mub_muw");
+        // u_i = u − r y_i or v_i = v + r x_i.
+        let hub = if along_x {
+            [(U, 1.0), (R, -rotor.y)]
+        } else {
+            [(V, 1.0), (R, rotor.x)]
+        };
+        let mut t = Vec::new();
+        for (velocity, arm) in hub {
+            let k = self.k() * scale * arm;
+            t.extend([
+                term(-k * self.theta("C_H_mub") * r, &[velocity, w]),
+                term(-k * self.theta("C_H_mub_mu0") * nu0, &[velocity]),
+                term(-k * self.theta("C_H_mub_mu"), &[velocity, Vh]),
+                term(k * muw, &[velocity, W]),
+                term(k * muw * rotor.y, &[velocity, P]),
+                term(-k * muw * rotor.x, &[velocity, Q]),
+            ]);
+        }
+        t.retain(|t| t.coef != 0.0);
+        t
+    }
+
+    /// Terms of rotor `i`'s aerodynamic torque Q̂_i (N m) from the base estimates, times
+    /// `scale`; with `rate`, of dQ̂_i/dΩ_i · Ω̇_i (N m/s).
+    pub(super) fn rotor_torque(&self, i: usize, scale: f64, rate: bool) -> Vec<Term> {
+        use Signal::*;
+        let r = self.vehicle.props.rotor_radius;
+        let nu0 = self.vehicle.hover_induced_velocity();
+        let rotor = self.vehicle.rotors()[i];
+        let (w, w2, wd) = rotor_signals(i);
+        let k = self.k() * scale;
+        let muw = self.theta("C_Q_muw") * r * r;
+        let mut t = if rate {
+            vec![
+                term(2.0 * k * self.theta("C_Q0") * r.powi(3), &[w, wd]),
+                term(k * self.theta("C_Q_mu0") * r * r * nu0, &[wd]),
+                term(k * self.theta("C_Q_mu") * r * r, &[Vh, wd]),
+                term(-k * muw, &[W, wd]),
+                term(-k * muw * rotor.y, &[P, wd]),
+                term(k * muw * rotor.x, &[Q, wd]),
+            ]
+        } else {
+            vec![
+                term(k * self.theta("C_Q0") * r.powi(3), &[w2]),
+                term(k * self.theta("C_Q_mu0") * r * r * nu0, &[w]),
+                term(k * self.theta("C_Q_mu") * r * r, &[Vh, w]),
+                term(-k * muw, &[W, w]),
+                term(-k * muw * rotor.y, &[P, w]),
+                term(k * muw * rotor.x, &[Q, w]),
+            ]
+        };
+        t.retain(|t| t.coef != 0.0);
+        t
+    }
+
+    /// Columns of a change of rotor thrusts ΔT_i = θ f_i T̂_i, with f_i the product of
+    /// `factor(i)` signals: F_z −ΣΔT_i, M_x −Σ y_i ΔT_i, M_y Σ x_i ΔT_i (Eq. 13–15).
+    pub(super) fn thrust_change(
+        &self,
+        label: &str,
+        rotors: &[usize],
+        factor: impl Fn(usize) -> Vec<Signal>,
+        sign: f64,
+    ) -> Vec<Column> {
+        THRUST_LOADS
+            .iter()
+            .map(|&(axis, lever, _)| {
+                let terms = rotors
+                    .iter()
+                    .flat_map(|&i| {
+                        let arm = lever(&self.vehicle.rotors()[i]);
+                        self.rotor_thrust(i, &factor(i), sign * arm, false)
+                    })
+                    .filter(|t| t.coef != 0.0)
+                    .collect();
+                column(axis, label, terms)
+            })
+            .filter(|c| !c.terms.is_empty())
+            .collect()
+    }
+
+    /// ∂(model load of `axis`)/∂(body velocity component `k`: u, v, w) from the base
+    /// estimates, as terms (u, v, w and V_h factors differentiated; ∂V_h/∂u = u/V_h).
+    pub(super) fn model_velocity_gradient(&self, axis: Axis, k: usize) -> Vec<Term> {
+        use Signal::*;
+        let velocity = [U, V, W][k];
+        let vh_slope = [Some(UOverVh), Some(VOverVh), None][k];
+        self.model_force(axis, 1.0)
+            .iter()
+            .flat_map(|t| {
+                (0..t.factors.len()).filter_map(move |i| {
+                    let slope = match t.factors[i] {
+                        f if f == velocity => None,
+                        Vh => Some(vh_slope?),
+                        _ => return None,
+                    };
+                    let mut factors = t.factors.clone();
+                    match slope {
+                        Some(s) => factors[i] = s,
+                        None => {
+                            factors.remove(i);
+                        }
+                    }
+                    Some(Term {
+                        coef: t.coef,
+                        factors,
+                    })
+                })
+            })
+            .collect()
+    }
+
+    /// Model force of axis `axis` from the base estimates, as terms times `scale`.
+    pub(super) fn model_force(&self, axis: Axis, scale: f64) -> Vec<Term> {
+        self.structure
+            .axis_columns(axis)
+            .flat_map(|j| {
+                let c = &self.structure.columns[j];
+                let th = self.theta[c.param];
+                c.terms.iter().map(move |t| Term {
+                    coef: t.coef * th * scale,
+                    factors: t.factors.clone(),
+                })
+            })
+            .filter(|t| t.coef != 0.0)
+            .collect()
+    }
+}
+
+/// (Ω_i, Ω_i², Ω̇_i) signals of rotor `i`.
+pub(super) fn rotor_signals(i: usize) -> (Signal, Signal, Signal) {
+    let i = u8::try_from(i).expect("rotor index below 256");
+    (
+        Signal::RotorSpeed(i),
+        Signal::RotorSpeedSquared(i),
+        Signal::RotorAcceleration(i),
+    )
+}
+
+/// A column of `terms` on `axis` (its parameter is set when the candidate is added to a
+/// model).
+pub(super) fn column(axis: Axis, label: &str, terms: Vec<Term>) -> Column {
+    Column {
+        axis,
+        param: 0,
+        label: label.to_string(),
+        terms,
+    }
+}

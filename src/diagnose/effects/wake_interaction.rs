@@ -1,0 +1,57 @@
+//! The rotor-wake family: rotors downstream in the wakes of rotors upstream lose the
+//! fraction θ f_i of their thrust, f_i their wake overlap (capped at 1) times the
+//! overlap-area form's wake strength V_h²/(V_h² + ν0²) (saturating with speed), or the
+//! advance-ratio form's μ_i = V_h/(Ω_i R) (growing with speed). The data choose the
+//! form; one of them enters a model.
+
+use super::context::CandidateContext;
+use crate::diagnose::candidate::{
+    Activity, Candidate, CandidateParameter, EffectKind as Kind, Role,
+};
+use crate::model::{Signal, term};
+
+const PHYSICS: &str = "In forward flight rotors downstream fly in the wakes of rotors upstream and lose thrust, more so as the wake is swept back.";
+
+/// The overlap-area form and the advance-ratio form.
+pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
+    let n = ctx.vehicle.rotor_count();
+    let all: Vec<usize> = (0..n).collect();
+    // `most`: the largest plausible loss per unit of the form's signal.
+    let form = |name: &str, param: &str, label: &str, signal: fn(u8) -> Signal, most: f64| {
+        let columns = ctx.thrust_change(label, &all, |i| vec![signal(i as u8)], -1.0);
+        let loss = CandidateParameter::new(param, "-", columns)
+            .within(0.0, most)
+            .fraction();
+        Candidate::new(
+            Kind::WakeInteraction,
+            Role::Mechanism,
+            name,
+            PHYSICS,
+            vec![loss],
+        )
+        .form_of(Kind::WakeInteraction)
+        // A tenth of a rotor's thrust or more at θ = 1, summed over rotors.
+        .acting_where(Activity {
+            terms: (0..n).map(|i| term(1.0, &[signal(i as u8)])).collect(),
+            threshold: 0.1,
+        })
+    };
+    vec![
+        // At most the whole thrust of a rotor fully in a wake.
+        form(
+            "rotor-wake interaction",
+            "wake_thrust_loss",
+            "-wake_i*T_i",
+            Signal::WakeImmersion,
+            1.0,
+        ),
+        // Per unit advance ratio: a full loss at μ ≈ 0.3 is k ≈ 3.
+        form(
+            "rotor-wake interaction, advance ratio",
+            "wake_thrust_loss_advance",
+            "-overlap_i*mu_i*T_i",
+            Signal::WakeAdvance,
+            5.0,
+        ),
+    ]
+}
