@@ -21,6 +21,7 @@ use crate::diagnose::local::{ActivityParts, LocalFolds, LocalRegions};
 use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
     SCREENING_SAMPLES, Thinned, candidate_set_on_threads, diagnose_on_threads,
+    hover_thrust_coefficient,
 };
 use crate::error::{Error, RequestError};
 use crate::estimate::{
@@ -252,6 +253,10 @@ fn read_log(
         chunks,
     })
 }
+
+/// Samples per segment, on average over a fit log, below which the log is taken for a
+/// sweep's points rather than a time series (no trim-moment candidates).
+const MIN_SEGMENT_SAMPLES: u64 = 256;
 
 /// Chunks in flight between a log's reader thread and its consumer.
 const CHUNKS_IN_FLIGHT: usize = 4;
@@ -837,6 +842,7 @@ impl Extended {
         req: &FitRequest,
         fit: &Fit,
         signals: Signals,
+        slow_thrust: bool,
         screening: &SampleChunk,
         options: &DiagnoseOptions,
     ) -> Result<Self, Error> {
@@ -848,6 +854,8 @@ impl Extended {
             has_omega_dot: signals.omega_dot,
             has_omega_ddot: signals.omega_ddot,
             has_attitude: signals.attitude,
+            has_slow_thrust: slow_thrust,
+            hover_thrust_coefficient: hover_thrust_coefficient(&req.vehicle, &[screening]),
         };
         let set = candidate_set_on_threads(&ctx, Some(screening), options, req.threads)?;
         let stored = stored_columns_of(&set.extended);
@@ -922,7 +930,15 @@ fn second_pass(
         theta: &out.fit.mmr.theta,
         residuals: ResidualPass::new(&req.structure, &out.fit, DiagnosticOptions::default()),
         extended: match (&req.diagnose, signals) {
-            (Some(options), Some(s)) => Some(Extended::new(req, &out.fit, s, screening, options)?),
+            (Some(options), Some(s)) => {
+                // Time series, not a sweep's points: the slow thrusts have a slow part.
+                let fit_logs = &out.summaries[..req.logs.len()];
+                let time_series = fit_logs
+                    .iter()
+                    .all(|s| s.samples >= MIN_SEGMENT_SAMPLES * s.segments.max(1) as u64);
+                let slow = s.omega_squared_slow && time_series;
+                Some(Extended::new(req, &out.fit, s, slow, screening, options)?)
+            }
             _ => None,
         },
         strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.kinds[k]).sum())),

@@ -98,6 +98,8 @@ fn check_candidate(
         has_omega_dot: true,
         has_omega_ddot: false,
         has_attitude: true,
+        has_slow_thrust: false,
+        hover_thrust_coefficient: None,
     };
     let cand = library(&ctx)
         .into_iter()
@@ -316,6 +318,8 @@ fn gathered_rows_equal_the_assembled_part() {
         has_omega_dot: true,
         has_omega_ddot: false,
         has_attitude: true,
+        has_slow_thrust: false,
+        hover_thrust_coefficient: None,
     };
     let mut rng = StdRng::seed_from_u64(5);
     let data: Vec<Sample> = samples(v.rotor_count(), 400)

@@ -85,6 +85,8 @@ fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::diagnose::Diag
         has_omega_dot: true,
         has_omega_ddot: false,
         has_attitude: false,
+        has_slow_thrust: false,
+        hover_thrust_coefficient: None,
     };
     let mut screening = Thinned::new(SCREENING_SAMPLES);
     fit_data.iter().for_each(|c| screening.push(c));

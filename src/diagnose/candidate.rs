@@ -55,6 +55,9 @@ pub enum EffectKind {
     SecondOrderInflow,
     /// Constant accelerometer bias in forces derived as m a.
     AccelerometerBias,
+    /// A slow moment the model lacks, balanced by the attitude loop: the slow part of
+    /// the control moment produces no angular acceleration.
+    TrimMoment,
     /// Residual structure with no physical name (the generic pool).
     Generic,
 }

@@ -1,6 +1,6 @@
 //! The diagnosis alone on in-memory data (sweeps), without the pipeline.
 
-use super::effects::CandidateContext;
+use super::effects::{CandidateContext, hover_thrust_coefficient};
 use super::generic::{SCREENING_SAMPLES, Thinned};
 use super::local::{ActivityParts, LocalFolds};
 use super::options::DiagnoseOptions;
@@ -39,6 +39,11 @@ pub fn diagnose_chunks(
         has_omega_dot: first.is_some_and(|c| c.has_omega_dot()),
         has_omega_ddot: first.is_some_and(|c| c.has_omega_ddot()),
         has_attitude: first.is_some_and(|c| !c.is_empty() && c.has_attitude()),
+        has_slow_thrust: first.is_some_and(|c| c.has_omega_squared_slow()),
+        hover_thrust_coefficient: hover_thrust_coefficient(
+            vehicle,
+            &fit_data.iter().collect::<Vec<_>>(),
+        ),
     };
     let mut thinned = Thinned::new(SCREENING_SAMPLES);
     fit_data.iter().for_each(|c| thinned.push(c));

@@ -21,7 +21,7 @@ pub use candidate::{
     Activity, Candidate, CandidateParameter, EffectKind, Reading, Role, Statement,
 };
 pub use chunks::diagnose_chunks;
-pub use effects::{CandidateContext, library};
+pub use effects::{CandidateContext, hover_thrust_coefficient, library};
 pub use generic::{SCREENING_SAMPLES, Thinned};
 pub use options::DiagnoseOptions;
 pub use procedure::{

@@ -37,6 +37,32 @@ pub struct CandidateContext<'a> {
     pub has_omega_ddot: bool,
     /// The data has the attitude (steady-wind candidate).
     pub has_attitude: bool,
+    /// The data are time series with the slow rotor thrusts derived (trim-moment
+    /// candidates).
+    pub has_slow_thrust: bool,
+    /// Thrust per Ω² of one rotor that carries the vehicle's weight on average over the
+    /// fit data, N s²/rad² ([`hover_thrust_coefficient`]); `None` when unknown.
+    pub hover_thrust_coefficient: Option<f64>,
+}
+
+/// m g / mean(Σ Ω_i²) over the samples of `chunks`, N s²/rad²: the thrust coefficient
+/// of a rotor if the rotors carried the weight on every sample (on average over a
+/// flight they do). A scale for candidates whose parameter reads as a fraction of a
+/// control moment, independent of the base fit (whose Ĉ_T0 can take any sign when other
+/// thrust terms share its work). `None` without samples or rotor speed.
+pub fn hover_thrust_coefficient(
+    vehicle: &Vehicle,
+    chunks: &[&crate::sample::SampleChunk],
+) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for c in chunks {
+        for k in 0..c.len() {
+            sum += c.omega.iter().map(|w| w[k] * w[k]).sum::<f64>();
+            n += 1;
+        }
+    }
+    let mean = sum / n as f64;
+    (n > 0 && mean > 0.0).then(|| vehicle.props.mass * crate::vehicle::STANDARD_GRAVITY / mean)
 }
 
 impl CandidateContext<'_> {

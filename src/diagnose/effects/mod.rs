@@ -27,11 +27,12 @@ mod rotor_rate_damping;
 mod rotor_speed_delay;
 mod second_order_inflow;
 mod steady_wind;
+mod trim_moment;
 mod vortex_ring;
 mod wake_interaction;
 mod yaw_rate_drag;
 
-pub use context::CandidateContext;
+pub use context::{CandidateContext, hover_thrust_coefficient};
 
 use super::candidate::Candidate;
 
@@ -40,7 +41,7 @@ type Effect = fn(&CandidateContext) -> Vec<Candidate>;
 
 /// Every effect of the library, in the order its candidates are offered (the order
 /// breaks ties in the search).
-const LIBRARY: [Effect; 18] = [
+const LIBRARY: [Effect; 19] = [
     ground_effect::candidates,
     rotor_asymmetry::candidates,
     cg_offset::candidates,
@@ -59,6 +60,7 @@ const LIBRARY: [Effect; 18] = [
     second_order_inflow::candidates,
     rotor_speed_delay::acceleration_thrust,
     accelerometer_bias::candidates,
+    trim_moment::candidates,
 ];
 
 /// Every candidate that applies to this vehicle, model and data.
@@ -92,6 +94,8 @@ mod tests {
             has_omega_dot: true,
             has_omega_ddot: true,
             has_attitude: true,
+            has_slow_thrust: true,
+            hover_thrust_coefficient: Some(1e-6),
         })
     }
 
@@ -126,6 +130,9 @@ mod tests {
             "second-order inflow",
             "thrust from rotor acceleration",
             "accelerometer bias",
+            "trim moment, 0.5 Hz",
+            "trim moment, 1 Hz",
+            "trim moment, 2 Hz",
         ];
         assert_eq!(names, expected);
     }
@@ -136,7 +143,7 @@ mod tests {
     /// `*scale*` and `*loss*`, a freed coefficient for `name@axis`).
     #[test]
     fn parameters_carry_their_range_and_reading() {
-        let ranges: [(&str, f64, f64); 12] = [
+        let ranges: [(&str, f64, f64); 15] = [
             ("thrust_scale_", -0.6, 0.6),
             ("in_plane_scale_", -0.6, 0.6),
             ("torque_scale_", -0.6, 0.6),
@@ -149,6 +156,10 @@ mod tests {
             ("rotor_speed_delay", -0.05, 0.2),
             ("wind_", -30.0, 30.0),
             ("accel_bias_", -2.0, 2.0),
+            // Added with the trim moment (never in the old table).
+            ("trim_roll", 0.0, 2.0),
+            ("trim_pitch", 0.0, 2.0),
+            ("trim_yaw", 0.0, f64::INFINITY),
         ];
         let library = full_library();
         let mut ranged = 0;
@@ -171,8 +182,8 @@ mod tests {
             }
         }
         // 4 rotors × 3 scales, 3 CG, 2 ground, 2 wake, vortex ring, 3 drag, delay, 3 wind,
-        // 2 bias.
-        assert_eq!(ranged, 29);
+        // 2 bias, 3 bands × 3 trim fractions.
+        assert_eq!(ranged, 38);
         let freed = library
             .iter()
             .filter(|c| c.kind == EffectKind::DecoupledMoments)

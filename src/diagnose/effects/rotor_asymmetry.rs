@@ -96,6 +96,8 @@ mod tests {
             has_omega_dot: false,
             has_omega_ddot: false,
             has_attitude: false,
+            has_slow_thrust: false,
+            hover_thrust_coefficient: None,
         };
         let third = &candidates(&ctx)[2];
         assert_eq!(third.parameters[0].name, "thrust_scale_3");
