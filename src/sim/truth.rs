@@ -12,7 +12,7 @@ use super::blade_element::{BladeDescription, BladeElementRotor, BladeOverrides, 
 use super::effects::{
     Effects, ground_effect_ratio, vortex_ring_factor, wake_advance_factors, wake_factors,
 };
-use super::inflow::{InflowModel, InflowState, solve as solve_inflow};
+use super::inflow::{InflowModel, InflowState};
 use crate::util::{cross, dot};
 use crate::vehicle::Vehicle;
 
@@ -266,7 +266,7 @@ impl TruthModel {
             let loads = match &mut lag {
                 None => self.rotor.loads(&kin, &self.inflow, &mut inflow[i]),
                 Some((nu, nu_qs)) => {
-                    nu_qs[i] = solve_inflow(&self.rotor, &kin, &self.inflow, &mut inflow[i]);
+                    nu_qs[i] = self.rotor.solve_inflow(&kin, &self.inflow, &mut inflow[i]);
                     self.rotor.loads_at_inflow(&kin, nu[i], false)
                 }
             };
