@@ -19,7 +19,7 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
     let dir = scratch::dir("sim-cli");
     let out = dir.join("out.csv");
     let out_s = out.to_str().unwrap();
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 6] = [
         (
             &[
                 "--preset",
@@ -40,6 +40,30 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
         (
             &["--vehicle", "no/such.toml", "--mode", "sweep"],
             "no/such.toml",
+        ),
+        (
+            &[
+                "--preset",
+                "quad_x",
+                "--mode",
+                "sweep",
+                "--effect",
+                "inflow_lag=0.01",
+            ],
+            "needs `--mode flight`",
+        ),
+        (
+            &[
+                "--preset",
+                "quad_x",
+                "--mode",
+                "flight",
+                "--duration",
+                "1",
+                "--effect",
+                "smoothed_loads=50",
+            ],
+            "below half the sample rate",
         ),
         (
             &[

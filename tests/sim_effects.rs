@@ -267,6 +267,15 @@ fn bad_effect_strings_are_refused_with_the_reason() {
         ("cg_offset=1,nan,0", "not a finite number"),
         ("ground_effect=9", "(0, 3]"),
         ("delay=-1", "[0, 1]"),
+        ("trim_moment=0.01,0.01", "takes"),
+        ("trim_moment=0.01,-0.01,0", "my = -0.01"),
+        ("trim_moment=0.01,0.01,0.01,0.02", "(0.05, 10] Hz"),
+        ("smoothed_loads=0", "must be > 0 Hz"),
+        ("smoothed_loads=5,2.5", "whole number 1 to 8"),
+        ("smoothed_loads=5,9", "whole number 1 to 8"),
+        ("rotor_speed_lag=0", "(0, 1] s"),
+        ("rotor_speed_lag", "takes"),
+        ("inflow_lag=2", "(0, 1] s"),
     ] {
         let e = s.parse::<Effect>().unwrap_err();
         assert!(e.contains(needle), "{s}: {e}");
@@ -279,5 +288,59 @@ fn bad_effect_strings_are_refused_with_the_reason() {
         Effects::new(twice, &v)
             .unwrap_err()
             .contains("more than once")
+    );
+}
+
+/// Every effect prints in canonical form (all parameters, defaults filled in) and parses
+/// back to itself; defaults are those of the module table.
+#[test]
+fn effects_round_trip_through_their_text() {
+    for (text, canonical) in [
+        ("ground_effect", "ground_effect=1"),
+        ("weak_rotor=2,0.8", "weak_rotor=2,0.8,0.8"),
+        ("cg_offset=0.01,-0.02,0.03", "cg_offset=0.01,-0.02,0.03"),
+        ("wake_interaction=0.3", "wake_interaction=0.3"),
+        ("wake_advance=0.5", "wake_advance=0.5"),
+        (
+            "quadratic_drag=0.01,0.02,0.04",
+            "quadratic_drag=0.01,0.02,0.04",
+        ),
+        ("vortex_ring=0.4", "vortex_ring=0.4"),
+        ("delay=0.02", "delay=0.02"),
+        ("wind=3,-1,0.5", "wind=3,-1,0.5"),
+        ("flapping=2e-5", "flapping=0.00002"),
+        ("dynamic_inflow=1e-5", "dynamic_inflow=0.00001"),
+        (
+            "trim_moment=0.02,0.02,0.01",
+            "trim_moment=0.02,0.02,0.01,0.5",
+        ),
+        (
+            "trim_moment=0.02, 0.02, 0.01, 1.5",
+            "trim_moment=0.02,0.02,0.01,1.5",
+        ),
+        ("smoothed_loads=28.85", "smoothed_loads=28.85,2"),
+        ("smoothed_loads=5,4", "smoothed_loads=5,4"),
+        ("rotor_speed_lag=0.015", "rotor_speed_lag=0.015"),
+        ("inflow_lag=0.005", "inflow_lag=0.005"),
+    ] {
+        let e: Effect = text.parse().unwrap();
+        assert_eq!(e.to_string(), canonical, "{text}");
+        assert_eq!(canonical.parse::<Effect>().unwrap(), e, "{canonical}");
+    }
+    let e: Effect = "trim_moment=0.02,0.02,0.01".parse().unwrap();
+    assert_eq!(
+        e,
+        Effect::TrimMoment {
+            rms: [0.02, 0.02, 0.01],
+            max_frequency: 0.5
+        }
+    );
+    let e: Effect = "smoothed_loads=28.85".parse().unwrap();
+    assert_eq!(
+        e,
+        Effect::SmoothedLoads {
+            cutoff: 28.85,
+            order: 2
+        }
     );
 }

@@ -454,10 +454,21 @@ impl BladeElementRotor {
         model: &super::inflow::InflowModel,
         state: &mut super::inflow::InflowState,
     ) -> HubLoads {
+        let nu = self.solve_inflow(kin, model, state);
+        self.loads_at_inflow(kin, nu, false)
+    }
+
+    /// The induced velocity ν (m/s) that `model` gives this rotor at `kin` (the thrust
+    /// at each trial inflow from blade elements); `state` warm-starts the solve.
+    pub fn solve_inflow(
+        &self,
+        kin: &RotorKinematics,
+        model: &super::inflow::InflowModel,
+        state: &mut super::inflow::InflowState,
+    ) -> f64 {
         let thrust = |nu: f64| -self.loads_at_inflow(kin, nu, true).force[2];
         let (rho, area) = (self.air_density, self.disk_area());
-        let nu = super::inflow::solve(kin.hub_velocity, rho, area, thrust, model, state);
-        self.loads_at_inflow(kin, nu, false)
+        super::inflow::solve(kin.hub_velocity, rho, area, thrust, model, state)
     }
 }
 

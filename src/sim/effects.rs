@@ -16,10 +16,15 @@
 //! | `wind=wn,we,wd` | m/s, NED | steady wind; the log holds ground-relative velocity instead of the air-relative velocity of the data contract (flight only) |
 //! | `flapping=a` | N s²/rad | blade flapping at a stiff hub: rotor i adds the hub moment a Ω_i (−v_i, u_i, 0), (u_i, v_i) its hub's in-plane air-relative velocity |
 //! | `dynamic_inflow=k` | N s²/rad | thrust responding to rotor acceleration: rotor i's thrust changes by k Ω̇_i (acting at its hub) |
+//! | `trim_moment=mx,my,mz[,f]` | RMS moment per body axis, N m; top frequency f, Hz (default 0.5) | a slowly varying airframe moment (fuselage or payload aerodynamics, a shifting battery) that the controller trims with differential thrust: per axis a sum of 8 sinusoids, frequencies drawn in [0.05, f] Hz, random phases, long-run RMS m ([`super::disturbance`]); part of the logged moment (flight only) |
+//! | `smoothed_loads=f[,n]` | cut-off f, Hz; Butterworth order n (default 2) | the log's loads were smoothed when it was made: `fx..mz` and `ax..az` pass through a zero-phase (forward-backward) Butterworth low-pass of order n at f, f below half the log rate ([`super::filter`]); NeuroBEM's angular acceleration is order 2 at ~29 Hz (flight only) |
+//! | `rotor_speed_lag=τ` | s | the logged rotor speed is the true one through a first-order lag y' = (Ω − y)/τ (an ESC telemetry filter), and the logged Ω̇ is y' (flight only) |
+//! | `inflow_lag=τ` | s, at least the integration step | dynamic inflow: each rotor's induced velocity follows its quasi-steady momentum value through a first-order lag ν' = (ν_qs − ν)/τ, integrated with the rigid body; thrust and torque then depend on the history of Ω (flight only) |
 
 use std::fmt;
 use std::str::FromStr;
 
+use super::disturbance::LOWEST_FREQUENCY;
 use crate::vehicle::Vehicle;
 
 /// One undeclared effect and its physical parameters.
@@ -84,10 +89,34 @@ pub enum Effect {
         /// Thrust per unit rotor acceleration, N s²/rad.
         k: f64,
     },
+    /// Slowly varying airframe moment, a sum of sinusoids per body axis.
+    TrimMoment {
+        /// Long-run RMS per body axis, N m.
+        rms: [f64; 3],
+        /// Highest tone frequency, Hz.
+        max_frequency: f64,
+    },
+    /// Zero-phase Butterworth smoothing of the logged loads.
+    SmoothedLoads {
+        /// Cut-off (−3 dB of one pass, −6 dB of the two), Hz.
+        cutoff: f64,
+        /// Butterworth order.
+        order: usize,
+    },
+    /// First-order lag between true and logged rotor speed.
+    RotorSpeedLag {
+        /// Time constant τ, s.
+        seconds: f64,
+    },
+    /// First-order lag of each rotor's induced velocity behind its quasi-steady value.
+    InflowLag {
+        /// Time constant τ, s.
+        seconds: f64,
+    },
 }
 
 /// All effect names, for help texts.
-pub const EFFECT_NAMES: [&str; 11] = [
+pub const EFFECT_NAMES: [&str; 15] = [
     "ground_effect",
     "weak_rotor",
     "cg_offset",
@@ -99,6 +128,10 @@ pub const EFFECT_NAMES: [&str; 11] = [
     "wind",
     "flapping",
     "dynamic_inflow",
+    "trim_moment",
+    "smoothed_loads",
+    "rotor_speed_lag",
+    "inflow_lag",
 ];
 
 impl Effect {
@@ -116,12 +149,28 @@ impl Effect {
             Self::Wind { .. } => "wind",
             Self::Flapping { .. } => "flapping",
             Self::DynamicInflow { .. } => "dynamic_inflow",
+            Self::TrimMoment { .. } => "trim_moment",
+            Self::SmoothedLoads { .. } => "smoothed_loads",
+            Self::RotorSpeedLag { .. } => "rotor_speed_lag",
+            Self::InflowLag { .. } => "inflow_lag",
         }
     }
 
     /// True for effects that act on the log rather than on the wrench (flight only).
     pub fn is_logging_effect(&self) -> bool {
-        matches!(self, Self::Delay { .. } | Self::Wind { .. })
+        matches!(
+            self,
+            Self::Delay { .. }
+                | Self::Wind { .. }
+                | Self::SmoothedLoads { .. }
+                | Self::RotorSpeedLag { .. }
+        )
+    }
+
+    /// True for effects that need a flight: logging effects, and effects with a time
+    /// history of their own (a moment varying in time, a lagged inflow state).
+    pub fn needs_flight(&self) -> bool {
+        self.is_logging_effect() || matches!(self, Self::TrimMoment { .. } | Self::InflowLag { .. })
     }
 }
 
@@ -149,6 +198,12 @@ impl fmt::Display for Effect {
             Self::VortexRing { k } => write!(f, "vortex_ring={k}"),
             Self::Delay { seconds } => write!(f, "delay={seconds}"),
             Self::Wind { ned } => write!(f, "wind={}", list(ned)),
+            Self::TrimMoment { rms, max_frequency } => {
+                write!(f, "trim_moment={},{max_frequency}", list(rms))
+            }
+            Self::SmoothedLoads { cutoff, order } => write!(f, "smoothed_loads={cutoff},{order}"),
+            Self::RotorSpeedLag { seconds } => write!(f, "rotor_speed_lag={seconds}"),
+            Self::InflowLag { seconds } => write!(f, "inflow_lag={seconds}"),
         }
     }
 }
@@ -296,6 +351,50 @@ impl FromStr for Effect {
                 want(1..=1, "`dynamic_inflow=k` (N s^2/rad)")?;
                 Self::DynamicInflow { k: values[0] }
             }
+            "trim_moment" => {
+                want(
+                    3..=4,
+                    "`trim_moment=mx,my,mz[,f]` (N m RMS per body axis, Hz)",
+                )?;
+                for (i, v) in values[..3].iter().enumerate() {
+                    in_range(["mx", "my", "mz"][i], *v, *v >= 0.0, "must be >= 0 N m")?;
+                }
+                let f = values.get(3).copied().unwrap_or(0.5);
+                Self::TrimMoment {
+                    rms: [values[0], values[1], values[2]],
+                    max_frequency: in_range(
+                        "f",
+                        f,
+                        f > LOWEST_FREQUENCY && f <= 10.0,
+                        "must be in (0.05, 10] Hz",
+                    )?,
+                }
+            }
+            "smoothed_loads" => {
+                want(1..=2, "`smoothed_loads=f[,order]` (Hz, Butterworth order)")?;
+                let f = in_range("f", values[0], values[0] > 0.0, "must be > 0 Hz")?;
+                let n = values.get(1).copied().unwrap_or(2.0);
+                let order = in_range(
+                    "order",
+                    n,
+                    (1.0..=8.0).contains(&n) && n.fract() == 0.0,
+                    "must be a whole number 1 to 8",
+                )?;
+                Self::SmoothedLoads {
+                    cutoff: f,
+                    order: order as usize,
+                }
+            }
+            "rotor_speed_lag" | "inflow_lag" => {
+                want(1..=1, &format!("`{name}=seconds`"))?;
+                let t = values[0];
+                let seconds = in_range("seconds", t, t > 0.0 && t <= 1.0, "must be in (0, 1] s")?;
+                if name == "inflow_lag" {
+                    Self::InflowLag { seconds }
+                } else {
+                    Self::RotorSpeedLag { seconds }
+                }
+            }
             other => {
                 return Err(format!(
                     "unknown effect `{other}`; known effects: {}",
@@ -440,6 +539,38 @@ impl Effects {
             _ => None,
         })
         .unwrap_or(0.0)
+    }
+
+    /// Trim moment (RMS per body axis N m, top frequency Hz), if on.
+    pub fn trim_moment(&self) -> Option<([f64; 3], f64)> {
+        self.find(|e| match e {
+            Effect::TrimMoment { rms, max_frequency } => Some((*rms, *max_frequency)),
+            _ => None,
+        })
+    }
+
+    /// Load smoothing (cut-off Hz, Butterworth order), if on.
+    pub fn smoothed_loads(&self) -> Option<(f64, usize)> {
+        self.find(|e| match e {
+            Effect::SmoothedLoads { cutoff, order } => Some((*cutoff, *order)),
+            _ => None,
+        })
+    }
+
+    /// Time constant of the logged rotor-speed lag (s), if on.
+    pub fn rotor_speed_lag(&self) -> Option<f64> {
+        self.find(|e| match e {
+            Effect::RotorSpeedLag { seconds } => Some(*seconds),
+            _ => None,
+        })
+    }
+
+    /// Time constant of the induced-velocity lag (s), if on.
+    pub fn inflow_lag(&self) -> Option<f64> {
+        self.find(|e| match e {
+            Effect::InflowLag { seconds } => Some(*seconds),
+            _ => None,
+        })
     }
 
     /// Steady wind (m/s, NED); zero when off.

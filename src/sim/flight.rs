@@ -3,9 +3,14 @@
 //! [`Controller`] along an aggressive reference, logged through [`Sensors`].
 //!
 //! State: NED position, body velocity relative to the ground v, attitude quaternion
-//! (body → NED), body rates ω, rotor speeds Ω. Eq. 1: ṗ = R v, Ṙ = R[ω×],
+//! (body → NED), body rates ω, rotor speeds Ω, and with `inflow_lag` each rotor's induced
+//! velocity ν (ν̇ = (ν_qs − ν)/τ, in the same RK4 step). Eq. 1: ṗ = R v, Ṙ = R[ω×],
 //! v̇ = v × ω + g Rᵀe₃ + F/m, ω̇ = I⁻¹(Iω × ω + M), with F, M the truth wrench at the
-//! air-relative velocity v − Rᵀ w_wind.
+//! air-relative velocity v − Rᵀ w_wind, plus the `trim_moment` moment at the stage's time.
+//!
+//! Log effects: `rotor_speed_lag` runs the logged rotor speed through its first-order lag
+//! once per step ([`super::sensors::lag_step`]), `delay` then reads that history τ late,
+//! and `smoothed_loads` filters the finished log's loads ([`super::filter`]).
 //!
 //! Reference (Froude-scaled by s = √(ℓ/ℓ_ref), lengths × s², times × s): a figure-of-eight
 //! with 30 s² m along north at 0.5/s rad/s (15 s m/s peak) and 7 s² m east at twice the
@@ -21,9 +26,11 @@ use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
 use super::controller::{Controller, Gains, Reference};
+use super::disturbance::TrimMoment;
+use super::filter::Butterworth;
 use super::inflow::InflowState;
 use super::output::LogTable;
-use super::sensors::{SensorConfig, Sensors};
+use super::sensors::{SensorConfig, Sensors, lag_step};
 use super::test_matrix::REFERENCE_ARM;
 use super::truth::{TruthInput, TruthModel};
 use crate::sample::{Sample, SampleChunk};
@@ -208,46 +215,70 @@ impl Manoeuvre {
 }
 
 /// Rigid-body state; `x` = [position(3), body velocity(3), quaternion w,x,y,z(4),
-/// rates(3), rotor speeds(N)].
+/// rates(3), rotor speeds(N)], followed with `inflow_lag` by the induced velocities (N).
 struct Dynamics<'a> {
     model: &'a TruthModel,
     inertia: Matrix3<f64>,
     inertia_inv: Matrix3<f64>,
     wind: Vector3<f64>,
+    /// The `trim_moment` effect's moment, if on.
+    trim: Option<TrimMoment>,
+    /// The `inflow_lag` time constant (s), if on.
+    inflow_lag: Option<f64>,
+    /// RK4 step h, s.
+    step: f64,
 }
 
 impl Dynamics<'_> {
-    /// Writes ẋ into `dx` and returns the wrench (and Ω̇ into `omega_dot`).
+    /// Writes ẋ at time `t` (s) into `dx` and returns the wrench (and Ω̇ into
+    /// `omega_dot`, one per rotor).
     fn derivative(
         &self,
         x: &[f64],
+        t: f64,
         cmd: &[f64],
         inflow: &mut [InflowState],
         dx: &mut [f64],
         omega_dot: &mut [f64],
     ) -> [f64; 6] {
+        let n = omega_dot.len();
         let tau = self.model.motor_time_constant;
         let q = UnitQuaternion::from_quaternion(Quaternion::new(x[6], x[7], x[8], x[9]));
         let rot = q.to_rotation_matrix();
         let r = rot.matrix();
         let v = Vector3::new(x[3], x[4], x[5]);
         let w = Vector3::new(x[10], x[11], x[12]);
-        let omega = &x[13..];
+        let omega = &x[13..13 + n];
         for ((d, c), o) in omega_dot.iter_mut().zip(cmd).zip(omega) {
             *d = (c - o) / tau;
         }
         let v_air = v - r.transpose() * self.wind;
-        let wrench = self.model.wrench(
-            &TruthInput {
-                velocity: [v_air.x, v_air.y, v_air.z],
-                rates: [w.x, w.y, w.z],
-                omega,
-                omega_dot,
-                height: Some(-x[2]),
-                down_row: Some([r[(2, 0)], r[(2, 1)], r[(2, 2)]]),
-            },
-            inflow,
-        );
+        let input = TruthInput {
+            velocity: [v_air.x, v_air.y, v_air.z],
+            rates: [w.x, w.y, w.z],
+            omega,
+            omega_dot,
+            height: Some(-x[2]),
+            down_row: Some([r[(2, 0)], r[(2, 1)], r[(2, 2)]]),
+        };
+        let mut wrench = match self.inflow_lag {
+            None => self.model.wrench(&input, inflow),
+            Some(lag) => {
+                // ν̇ = (ν_qs − ν)/τ, the quasi-steady values written into dx first.
+                let (nu, nu_dot) = (&x[13 + n..], &mut dx[13 + n..]);
+                let wrench = self.model.wrench_lagged_inflow(&input, inflow, nu, nu_dot);
+                for (d, v) in nu_dot.iter_mut().zip(nu) {
+                    *d = (*d - v) / lag;
+                }
+                wrench
+            }
+        };
+        if let Some(trim) = &self.trim {
+            let m = trim.at(t);
+            for k in 0..3 {
+                wrench[3 + k] += m[k];
+            }
+        }
         let f = Vector3::new(wrench[0], wrench[1], wrench[2]);
         let m = Vector3::new(wrench[3], wrench[4], wrench[5]);
         let pdot = r * v;
@@ -261,7 +292,7 @@ impl Dynamics<'_> {
         dx[3..6].copy_from_slice(vdot.as_slice());
         dx[6..10].copy_from_slice(&[qdot.w, qdot.i, qdot.j, qdot.k]);
         dx[10..13].copy_from_slice(wdot.as_slice());
-        dx[13..].copy_from_slice(omega_dot);
+        dx[13..13 + n].copy_from_slice(omega_dot);
         wrench
     }
 }
@@ -276,43 +307,59 @@ struct Rk4Scratch {
 }
 
 impl Rk4Scratch {
-    fn new(len: usize) -> Self {
+    /// Work vectors for a state of `len` values and `rotors` rotors.
+    fn new(len: usize, rotors: usize) -> Self {
         Self {
             k2: vec![0.0; len],
             k3: vec![0.0; len],
             k4: vec![0.0; len],
             tmp: vec![0.0; len],
-            omega_dot: vec![0.0; len - 13],
+            omega_dot: vec![0.0; rotors],
         }
     }
 }
 
 impl Dynamics<'_> {
-    /// One classical RK4 step of length `h` (s) from `x` with slope `k1` at `x`, the
-    /// rotor command held; renormalises the quaternion.
+    /// One classical RK4 step of length h (s) from `x` at time `t` (s) with slope `k1`
+    /// at `x`, the rotor command held; renormalises the quaternion.
     // The stage arrays are indexed together; an index loop reads as the textbook formula.
     #[allow(clippy::needless_range_loop)]
     fn rk4_step(
         &self,
         x: &mut [f64],
+        t: f64,
         cmd: &[f64],
         k1: &[f64],
-        h: f64,
         inflow: &mut [InflowState],
         s: &mut Rk4Scratch,
     ) {
+        let h = self.step;
         for i in 0..x.len() {
             s.tmp[i] = x[i] + 0.5 * h * k1[i];
         }
-        self.derivative(&s.tmp, cmd, inflow, &mut s.k2, &mut s.omega_dot);
+        self.derivative(
+            &s.tmp,
+            t + 0.5 * h,
+            cmd,
+            inflow,
+            &mut s.k2,
+            &mut s.omega_dot,
+        );
         for i in 0..x.len() {
             s.tmp[i] = x[i] + 0.5 * h * s.k2[i];
         }
-        self.derivative(&s.tmp, cmd, inflow, &mut s.k3, &mut s.omega_dot);
+        self.derivative(
+            &s.tmp,
+            t + 0.5 * h,
+            cmd,
+            inflow,
+            &mut s.k3,
+            &mut s.omega_dot,
+        );
         for i in 0..x.len() {
             s.tmp[i] = x[i] + h * s.k3[i];
         }
-        self.derivative(&s.tmp, cmd, inflow, &mut s.k4, &mut s.omega_dot);
+        self.derivative(&s.tmp, t + h, cmd, inflow, &mut s.k4, &mut s.omega_dot);
         for i in 0..x.len() {
             x[i] += h / 6.0 * (k1[i] + 2.0 * s.k2[i] + 2.0 * s.k3[i] + s.k4[i]);
         }
@@ -354,6 +401,16 @@ fn hover_torque(model: &TruthModel) -> f64 {
 /// diverged (tilt beyond 90°, ground contact, or 50 s² m from the reference).
 pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<FlightLog, String> {
     let ratio = steps_per_log(config)?;
+    let smoothing = load_smoothing(model, config)?;
+    let inflow_lag = model.effects.inflow_lag();
+    if let Some(lag) = inflow_lag
+        && lag < config.step
+    {
+        return Err(format!(
+            "effect `inflow_lag`: tau = {lag} s is shorter than the integration step {} s; use a step (`--step`) of at most {lag} s",
+            config.step
+        ));
+    }
     let vehicle = &model.vehicle;
     let n = vehicle.rotor_count();
     let mut rng = StdRng::seed_from_u64(seed);
@@ -366,6 +423,12 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         inertia,
         inertia_inv: inertia.try_inverse().ok_or("flight: singular inertia")?,
         wind: Vector3::new(wind[0], wind[1], wind[2]),
+        trim: model
+            .effects
+            .trim_moment()
+            .map(|(rms, f)| TrimMoment::new(rms, f, seed)),
+        inflow_lag,
+        step: config.step,
     };
     let mut inflow = model.inflow_states();
     let controller = Controller::new(
@@ -375,10 +438,26 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         Gains::for_time_scale(manoeuvre.scale),
     );
     let r0 = manoeuvre.reference(0.0);
-    let mut x = vec![0.0; 13 + n];
+    let len = 13 + n + if inflow_lag.is_some() { n } else { 0 };
+    let mut x = vec![0.0; len];
     x[0..3].copy_from_slice(r0.position.as_slice());
     x[6] = 1.0;
-    x[13..].fill(model.hover_omega);
+    x[13..13 + n].fill(model.hover_omega);
+    if inflow_lag.is_some() {
+        // The lagged inflow starts at its quasi-steady value (written into the state's ν;
+        // the wrench at ν = 0 is not used): a steady hover start.
+        let (state, nu) = x.split_at_mut(13 + n);
+        let zeros = vec![0.0; n];
+        let input = TruthInput {
+            velocity: [0.0; 3],
+            rates: [0.0; 3],
+            omega: &state[13..],
+            omega_dot: &zeros,
+            height: Some(-state[2]),
+            down_row: Some([0.0, 0.0, 1.0]),
+        };
+        model.wrench_lagged_inflow(&input, &mut inflow, &zeros, nu);
+    }
     let steps = (config.duration / config.step).round() as usize;
     let n_log = steps / ratio + 1;
     let mut samples = SampleChunk::with_capacity(n, n_log, true);
@@ -388,11 +467,15 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         ..Default::default()
     };
     let delay_steps = model.effects.delay() / config.step;
+    let speed_lag = model.effects.rotor_speed_lag();
+    // The logged (lagged) rotor speeds y, starting at the true hover speeds.
+    let mut lagged = x[13..13 + n].to_vec();
+    let mut previous = lagged.clone();
     let mut history: Vec<f64> = Vec::with_capacity((steps + 1) * 2 * n);
     let mut cmd = vec![0.0; n];
     let mut omega_dot = vec![0.0; n];
-    let mut k1 = vec![0.0; 13 + n];
-    let mut scratch = Rk4Scratch::new(13 + n);
+    let mut k1 = vec![0.0; len];
+    let mut scratch = Rk4Scratch::new(len, n);
     let mut sample = Sample {
         omega: vec![0.0; n],
         omega_dot: vec![0.0; n],
@@ -407,9 +490,23 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         let v_ned = rot * Vector3::new(x[3], x[4], x[5]);
         let rates = Vector3::new(x[10], x[11], x[12]);
         controller.command(&reference, &pos, &v_ned, &rot, &rates, &mut cmd);
-        let wrench = dynamics.derivative(&x, &cmd, &mut inflow, &mut k1, &mut omega_dot);
-        history.extend_from_slice(&x[13..]);
-        history.extend_from_slice(&omega_dot);
+        let wrench = dynamics.derivative(&x, t, &cmd, &mut inflow, &mut k1, &mut omega_dot);
+        match speed_lag {
+            None => {
+                history.extend_from_slice(&x[13..13 + n]);
+                history.extend_from_slice(&omega_dot);
+            }
+            Some(lag) => {
+                // y' = (Ω − y)/τ over the step just taken, Ω linear in between; the
+                // logged Ω̇ is y', the derivative of the logged speed.
+                for i in 0..n {
+                    lagged[i] = lag_step(lagged[i], previous[i], x[13 + i], config.step, lag);
+                }
+                previous.copy_from_slice(&x[13..13 + n]);
+                history.extend_from_slice(&lagged);
+                history.extend((0..n).map(|i| (x[13 + i] - lagged[i]) / lag));
+            }
+        }
         // Extremes and divergence checks.
         let tilt = rot.matrix()[(2, 2)].clamp(-1.0, 1.0).acos();
         let err = (reference.position - pos).norm();
@@ -448,7 +545,12 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         if step == steps {
             break;
         }
-        dynamics.rk4_step(&mut x, &cmd, &k1, config.step, &mut inflow, &mut scratch);
+        dynamics.rk4_step(&mut x, t, &cmd, &k1, &mut inflow, &mut scratch);
+    }
+    if let Some(filter) = smoothing {
+        for column in samples.wrench.iter_mut().chain(specific_force.iter_mut()) {
+            *column = filter.filtfilt(column);
+        }
     }
     let mut table = LogTable::from_chunk(&samples, !config.imu_only);
     for (k, name) in ["ax", "ay", "az"].iter().enumerate() {
@@ -460,6 +562,26 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
         table,
         summary,
     })
+}
+
+/// The `smoothed_loads` filter at the log rate, if the effect is on; refuses a cut-off at
+/// or above half the log rate.
+fn load_smoothing(
+    model: &TruthModel,
+    config: &FlightConfig,
+) -> Result<Option<Butterworth>, String> {
+    model
+        .effects
+        .smoothed_loads()
+        .map(|(cutoff, order)| {
+            Butterworth::low_pass(order, cutoff, config.log_rate).map_err(|e| {
+                format!(
+                    "effect `smoothed_loads` at the log rate {} Hz: {e}",
+                    config.log_rate
+                )
+            })
+        })
+        .transpose()
 }
 
 /// Fills `s` with the logged values at time `t`: gyro, velocity estimate (ground-relative

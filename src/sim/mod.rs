@@ -5,6 +5,8 @@
 //! - [`inflow`]: implicit momentum inflow coupled to the blade thrust;
 //! - [`truth`]: the vehicle wrench (seed §4.1 transmission, airframe drag, effects);
 //! - [`effects`]: named undeclared effects with physical parameters;
+//! - [`disturbance`]: the slowly varying airframe moment of the `trim_moment` effect;
+//! - [`filter`]: zero-phase Butterworth smoothing of a log (`smoothed_loads`);
 //! - [`test_matrix`]: response-surface sweeps (uniform, Latin hypercube);
 //! - [`flight`], [`controller`], [`sensors`]: time-domain flights with a cascaded
 //!   controller and IMU / eRPM sensors;
@@ -12,7 +14,9 @@
 
 pub mod blade_element;
 pub mod controller;
+pub mod disturbance;
 pub mod effects;
+pub mod filter;
 pub mod flight;
 pub mod inflow;
 pub mod output;

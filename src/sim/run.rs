@@ -88,10 +88,15 @@ pub fn build_model(opts: &SimulateOptions) -> Result<TruthModel, String> {
     };
     let effects = Effects::new(opts.effects.clone(), &vehicle)?;
     if matches!(opts.mode, Mode::Sweep { .. })
-        && let Some(e) = effects.iter().find(|e| e.is_logging_effect())
+        && let Some(e) = effects.iter().find(|e| e.needs_flight())
     {
+        let what = if e.is_logging_effect() {
+            "acts on a flight log"
+        } else {
+            "acts over time in a flight"
+        };
         return Err(format!(
-            "effect `{}` acts on a flight log and needs `--mode flight`",
+            "effect `{}` {what} and needs `--mode flight`",
             e.name()
         ));
     }

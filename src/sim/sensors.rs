@@ -1,6 +1,7 @@
 //! Flight-log sensors: accelerometer specific force and gyro with white noise and a
 //! constant bias drawn per flight, velocity from a state estimator with white noise, and
-//! rotor speed from ESC telemetry quantised in electrical RPM.
+//! rotor speed from ESC telemetry quantised in electrical RPM (optionally through the
+//! first-order lag of [`lag_step`]).
 
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -85,6 +86,15 @@ impl Sensors {
         let q = (erpm / self.config.erpm_resolution).floor() * self.config.erpm_resolution;
         q * per_erpm
     }
+}
+
+/// One step of the first-order lag y' = (x − y)/τ (an ESC telemetry filter, the
+/// `rotor_speed_lag` effect): from y = `y0` with the input moving linearly from `x0` to
+/// `x1` over `h` s, the exact solution y(h) = x1 + (y0 − x0) a − (x1 − x0)(τ/h)(1 − a),
+/// a = e^(−h/τ) (τ = `tau`, s).
+pub fn lag_step(y0: f64, x0: f64, x1: f64, h: f64, tau: f64) -> f64 {
+    let a = (-h / tau).exp();
+    x1 + (y0 - x0) * a - (x1 - x0) * (tau / h) * (1.0 - a)
 }
 
 fn gauss(rng: &mut StdRng) -> f64 {

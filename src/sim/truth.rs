@@ -1,6 +1,8 @@
 //! The truth wrench of the whole vehicle: blade-element rotors at their local velocity,
 //! carried to the CG as in seed §4.1 (Eq. 11–17, with the full ω × r_i of Eq. 17 rather
-//! than Eq. 18), plus airframe drag and the undeclared effects.
+//! than Eq. 18), plus airframe drag and the undeclared effects. Each rotor is at its
+//! quasi-steady inflow, or with `inflow_lag` at an induced velocity the flight carries as
+//! a state ([`TruthModel::wrench_lagged_inflow`]).
 
 use std::path::Path;
 
@@ -191,8 +193,32 @@ impl TruthModel {
     }
 
     /// Force (N) and moment about the true CG (N m) on the airframe, body axes,
-    /// `[F_x, F_y, F_z, M_x, M_y, M_z]`, gravity excluded.
+    /// `[F_x, F_y, F_z, M_x, M_y, M_z]`, gravity excluded; each rotor at its quasi-steady
+    /// inflow (the `inflow_lag` effect is not applied: see [`Self::wrench_lagged_inflow`]).
     pub fn wrench(&self, x: &TruthInput, inflow: &mut [InflowState]) -> [f64; 6] {
+        self.wrench_inner(x, inflow, None)
+    }
+
+    /// The wrench of [`Self::wrench`] with each rotor at the induced velocity `nu[i]`
+    /// (m/s) instead of its quasi-steady value; writes the quasi-steady values ν_qs,i
+    /// (m/s, momentum theory coupled to the blade thrust at `x`) into `nu_qs`. The
+    /// `inflow_lag` effect integrates ν̇_i = (ν_qs,i − ν_i)/τ with the rigid body.
+    pub fn wrench_lagged_inflow(
+        &self,
+        x: &TruthInput,
+        inflow: &mut [InflowState],
+        nu: &[f64],
+        nu_qs: &mut [f64],
+    ) -> [f64; 6] {
+        self.wrench_inner(x, inflow, Some((nu, nu_qs)))
+    }
+
+    fn wrench_inner(
+        &self,
+        x: &TruthInput,
+        inflow: &mut [InflowState],
+        mut lag: Option<(&[f64], &mut [f64])>,
+    ) -> [f64; 6] {
         let props = &self.vehicle.props;
         let radius = props.rotor_radius;
         let nu0 = self.vehicle.hover_induced_velocity();
@@ -237,7 +263,13 @@ impl TruthModel {
                 hub_velocity: v_hub,
                 body_rates: x.rates,
             };
-            let loads = self.rotor.loads(&kin, &self.inflow, &mut inflow[i]);
+            let loads = match &mut lag {
+                None => self.rotor.loads(&kin, &self.inflow, &mut inflow[i]),
+                Some((nu, nu_qs)) => {
+                    nu_qs[i] = self.rotor.solve_inflow(&kin, &self.inflow, &mut inflow[i]);
+                    self.rotor.loads_at_inflow(&kin, nu[i], false)
+                }
+            };
             let (mut f, mut m) = (loads.force, loads.moment);
             let mut thrust_factor =
                 wake.get(i).copied().unwrap_or(1.0) * wake_advance.get(i).copied().unwrap_or(1.0);
