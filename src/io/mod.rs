@@ -145,9 +145,10 @@ pub struct Summary {
     /// Warnings about implausible units.
     pub unit_warnings: Vec<String>,
     /// Median step between the times of consecutive rows read, s (`None` with fewer
-    /// than two): a sample interval, or a test point's spacing in a sweep.
+    /// than two, and for a log in memory): a sample interval, or a test point's spacing
+    /// in a sweep.
     pub median_time_step: Option<f64>,
-    /// Time from the first row read to the last, s.
+    /// Time from the first row read to the last, s (0 for a log in memory).
     pub span: f64,
     /// Motor layout inferred from moments vs individual rotor speeds.
     pub layout: Option<LayoutReport>,
