@@ -1,6 +1,8 @@
 //! The command handlers of the binary: read arguments, call the library, print and
-//! write outputs (each output file written whole or not at all).
+//! write outputs (each output file written whole or not at all, and never over an
+//! input; a closed stdout ends the printing quietly).
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -8,6 +10,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use mrsysid::Identification;
 use mrsysid::estimate::{self, ResidualDiagnostics};
 use mrsysid::identified::IdentifiedModel;
+use mrsysid::inputs::same_file;
 use mrsysid::io::{self, InvalidSamples, Mapping, ReadOptions};
 use mrsysid::model::{ModelOptions, Workspace};
 use mrsysid::pipeline::{FitOutcome, Holdout, PlotSeries};
@@ -47,6 +50,82 @@ impl<E: Into<mrsysid::Error>> From<E> for Failure {
     }
 }
 
+/// Set once stdout was found closed: nothing more is written to it.
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// Prints `text` on stdout. A closed stdout (the reading end of a pipe gone, as with
+/// `| head`) is no error: printing stops quietly and the command goes on (its files are
+/// still written) and exits 0. Any other write error fails the command.
+pub fn print_out(text: &str) -> Result<(), Failure> {
+    if STDOUT_CLOSED.load(Ordering::Relaxed) {
+        return Ok(());
+    }
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+            STDOUT_CLOSED.store(true, Ordering::Relaxed);
+            Ok(())
+        }
+        Err(e) => Err(Failure::input(format!("cannot write to stdout: {e}"))),
+    }
+}
+
+/// Prints `line` and a line end on stderr; a closed stderr is ignored (nothing is left
+/// to report it on).
+pub fn print_err(line: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{line}");
+}
+
+/// `path` with its directory resolved (links, `..`) when that exists: two spellings of
+/// one file yet to be written compare equal.
+fn resolved(path: &Path) -> PathBuf {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match (dir.canonicalize(), path.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Refuses, before any work, an output (option, path) that is the same file as an
+/// input (role, path) — however spelled: links, `..` — and two outputs that are one
+/// file: an input is never overwritten, an output never overwrites another.
+pub fn check_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Result<(), Failure> {
+    for (i, (option, out)) in outputs.iter().enumerate() {
+        if let Some((role, input)) = inputs.iter().find(|(_, input)| same_file(out, input)) {
+            return Err(Failure::input(format!(
+                "{option} {} is the same file as the {role} {}: refusing to overwrite an input",
+                out.display(),
+                input.display()
+            )));
+        }
+        let twin = outputs[i + 1..]
+            .iter()
+            .find(|(_, other)| same_file(out, other) || resolved(out) == resolved(other));
+        if let Some((other, path)) = twin {
+            return Err(Failure::input(format!(
+                "{option} {} and {other} {} are the same file: give each output a file of its \
+                 own",
+                out.display(),
+                path.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// File names (without extension) of the plots `fit --plots` writes; each is written as
+/// `.svg` and `.png`.
+const PLOT_STEMS: [&str; 4] = [
+    "fit_time_histories",
+    "validation_time_histories",
+    "residual_density",
+    "normal_probability",
+];
+
 /// Everything `fit` and `diagnose` take from the command line.
 pub struct FitCommand {
     pub logs: Vec<PathBuf>,
@@ -79,12 +158,36 @@ fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
     Ok(path.map(Mapping::from_toml_file).transpose()?)
 }
 
+/// The outputs of `fit` (for [`check_outputs`]): the JSON report, the model file, the
+/// plot directory and the plot files in it.
+fn fit_outputs(cmd: &FitCommand) -> Vec<(&'static str, PathBuf)> {
+    let mut out = Vec::new();
+    out.extend(cmd.json.iter().map(|p| ("--json", p.clone())));
+    out.extend(cmd.model_out.iter().map(|p| ("--model-out", p.clone())));
+    if let Some(dir) = &cmd.plots {
+        out.push(("--plots", dir.clone()));
+        for stem in PLOT_STEMS {
+            for ext in ["svg", "png"] {
+                out.push(("--plots", dir.join(stem).with_extension(ext)));
+            }
+        }
+    }
+    out
+}
+
 /// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
 pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
+    let outputs = fit_outputs(cmd);
+    let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
+    let mut inputs: Vec<(&str, &Path)> = vec![("vehicle file", cmd.vehicle.as_path())];
+    inputs.extend(cmd.mapping.iter().map(|p| ("mapping file", p.as_path())));
+    inputs.extend(cmd.logs.iter().map(|p| ("fit log", p.as_path())));
+    inputs.extend(cmd.validate.iter().map(|p| ("validation log", p.as_path())));
+    check_outputs(&outputs, &inputs)?;
     let vehicle = Vehicle::from_toml_file(&cmd.vehicle)?;
     if !cmd.quiet {
         for note in vehicle.notes() {
-            eprintln!("note: {}: {note}", cmd.vehicle.display());
+            print_err(&format!("note: {}: {note}", cmd.vehicle.display()));
         }
     }
     if let Some(dir) = &cmd.plots {
@@ -117,11 +220,11 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
     let report = results.report();
     if !cmd.quiet {
         print_reader_notes(results.outcome());
-        match (&report.diagnosis, diagnosis_only) {
-            (Some(d), true) => print!("{}", tables::render_diagnosis(d)),
-            (None, true) => println!("diagnosis skipped (--no-diagnose)"),
-            (_, false) => print!("{}", tables::render(&report)),
-        }
+        print_out(&match (&report.diagnosis, diagnosis_only) {
+            (Some(d), true) => tables::render_diagnosis(d),
+            (None, true) => "diagnosis skipped (--no-diagnose)\n".to_string(),
+            (_, false) => tables::render(&report),
+        })?;
     }
     if let Some(path) = &cmd.json {
         let text =
@@ -210,7 +313,7 @@ fn print_reader_notes(out: &FitOutcome) {
         );
         notes.extend(s.unit_warnings.iter().cloned());
         if !notes.is_empty() {
-            eprintln!("note: {}: {}", s.file, notes.join("; "));
+            print_err(&format!("note: {}: {}", s.file, notes.join("; ")));
         }
     }
 }
@@ -228,14 +331,15 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
             })
             .collect()
     };
+    let [fit_histories, validation_histories, density, probability] = PLOT_STEMS;
     for (name, title, s) in [
         (
-            "fit_time_histories",
+            fit_histories,
             "Fit data: measured vs Eq. 22 model (before diagnosis)",
             &out.fit_series,
         ),
         (
-            "validation_time_histories",
+            validation_histories,
             "Validation data: measured vs Eq. 22 model (before diagnosis)",
             &out.validation_series,
         ),
@@ -257,12 +361,12 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
     }
     if let Some(d) = &out.diagnostics {
         plots::residual_densities(
-            &dir.join("residual_density"),
+            &dir.join(density),
             "Residual probability density (fit data)",
             &densities(d),
         )?;
         plots::normal_probability(
-            &dir.join("normal_probability"),
+            &dir.join(probability),
             "Normal probability of residuals (fit data)",
             &normal_points(d),
         )?;
@@ -334,6 +438,9 @@ pub fn predict(
     mapping: Option<&Path>,
     out: &Path,
 ) -> Result<(), Failure> {
+    let mut inputs = vec![("model file", model), ("log", log)];
+    inputs.extend(mapping.map(|p| ("mapping file", p)));
+    check_outputs(&[("--out", out)], &inputs)?;
     let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
     let mut reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
@@ -364,6 +471,11 @@ pub fn validate(
     mapping: Option<&Path>,
     json: Option<&Path>,
 ) -> Result<(), Failure> {
+    let mut inputs = vec![("model file", model)];
+    inputs.extend(mapping.map(|p| ("mapping file", p)));
+    inputs.extend(logs.iter().map(|p| ("log", p.as_path())));
+    let outputs: Vec<(&str, &Path)> = json.iter().map(|p| ("--json", *p)).collect();
+    check_outputs(&outputs, &inputs)?;
     let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
     let mut acc = Accumulator::new(&m.structure);
@@ -382,21 +494,27 @@ pub fn validate(
     }
     let metrics = estimate::evaluate(&m.structure, &m.theta(), &acc)?;
     let rows: Vec<AxisRow> = metrics.iter().map(AxisRow::from).collect();
-    println!("{} samples; model {}", acc.count(), model.display());
-    println!(
-        "  {:<4} {:>10} {:>8} {:>8} {:>12}",
-        "axis", "NRMSE [%]", "TIC", "R2 [%]", "RMSE"
+    let mut text = format!(
+        "{} samples; model {}\n  {:<4} {:>10} {:>8} {:>8} {:>12}\n",
+        acc.count(),
+        model.display(),
+        "axis",
+        "NRMSE [%]",
+        "TIC",
+        "R2 [%]",
+        "RMSE"
     );
     for r in &rows {
-        println!(
-            "  {:<4} {:>10.2} {:>8.3} {:>8.1} {:>12.4e}",
+        text.push_str(&format!(
+            "  {:<4} {:>10.2} {:>8.3} {:>8.1} {:>12.4e}\n",
             r.axis.name(),
             100.0 * r.nrmse,
             r.tic,
             100.0 * r.r2,
             r.rmse
-        );
+        ));
     }
+    print_out(&text)?;
     if let Some(path) = json {
         let text = serde_json::to_string_pretty(
             &serde_json::json!({ "samples": acc.count(), "axes": rows }),
@@ -412,6 +530,8 @@ pub fn validate(
 /// parameters, to `out` or stdout; the notes (what to fill in, the layout check) go to
 /// stderr.
 pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> {
+    let outputs: Vec<(&str, &Path)> = out.iter().map(|p| ("--out", *p)).collect();
+    check_outputs(&outputs, &[("ULog", log)])?;
     let defs = io::ulog::read_definitions(log)?;
     let file = io::error::display_name(log);
     let rotors = io::px4::rotors_from_parameters(&defs.parameters)
@@ -426,15 +546,15 @@ pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> 
         Some(path) => {
             write_atomically(path, text.as_bytes())
                 .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
-            eprintln!("wrote {}", path.display());
+            print_err(&format!("wrote {}", path.display()));
         }
-        None => print!("{text}"),
+        None => print_out(&text)?,
     }
-    eprintln!(
+    print_err(&format!(
         "note: {} rotors from CA_ROTOR_* of {file}; fill in mass, inertia, rotor_radius and \
          rotor_inertia (PX4 does not log them) before `mrsysid fit`.\nnote: layout: {}",
         rotors.len(),
         io::px4::layout_check(&rotors)
-    );
+    ));
     Ok(())
 }

@@ -218,7 +218,12 @@ impl Identification {
         &self.request
     }
 
-    /// Reads the logs, fits, cross-validates and diagnoses.
+    /// Reads the logs, fits, cross-validates and diagnoses. Before reading, a log given
+    /// twice among the fit logs (the same file, a copy, the same samples in memory) and a
+    /// validation log that is also a fit log are refused
+    /// ([`crate::error::RequestError::DuplicateLog`],
+    /// [`crate::error::RequestError::ValidationIsFitLog`]): their cross-validated or
+    /// validation figures would be in-sample.
     pub fn run(&self) -> Result<Results, Error> {
         if let Some(e) = &self.bad_samples {
             return Err(e.clone().into());

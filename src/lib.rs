@@ -46,6 +46,8 @@
 //! - [`identify`]: the fit builder [`Identification`] and its [`Results`];
 //! - [`pipeline`]: the streaming fit over logs (both passes, threads, hold-out);
 //! - [`source`]: where samples come from (files, or [`source::MemoryLog`]);
+//! - [`inputs`]: checks of a request's files (a log given twice, an output that is an
+//!   input);
 //! - [`io`]: log readers (CSV contract and mapped CSV, MCAP, PX4 ULog) and writers;
 //! - [`identified`]: the saved model file, prediction with an identified model;
 //! - [`report`]: the report (tables, JSON) and, with the `plots` feature, plots;
@@ -67,6 +69,7 @@ pub mod error;
 pub mod estimate;
 pub mod identified;
 pub mod identify;
+pub mod inputs;
 pub mod io;
 pub mod mixing;
 pub mod model;

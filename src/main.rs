@@ -104,9 +104,9 @@ struct FitArgs {
     /// Write plots (SVG and PNG) into this directory.
     #[arg(long)]
     plots: Option<PathBuf>,
-    /// Threads for reading, accumulating and the diagnosis's trial fits (default: available
-    /// cores; the report does not depend on it).
-    #[arg(long)]
+    /// Threads for reading, accumulating and the diagnosis's trial fits, at least 1
+    /// (default: available cores; the report does not depend on it).
+    #[arg(long, value_parser = parse_threads)]
     threads: Option<usize>,
     /// Print nothing but errors.
     #[arg(long)]
@@ -214,6 +214,14 @@ fn parse_effect(s: &str) -> Result<Effect, String> {
     s.parse()
 }
 
+fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(0) => Err("the thread count must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 impl SimulateArgs {
     fn options(&self) -> SimulateOptions {
         let vehicle = match (&self.vehicle, &self.preset) {
@@ -262,18 +270,28 @@ fn main() -> ExitCode {
             args.mapping.as_deref(),
             args.json.as_deref(),
         ),
-        Command::Simulate(args) => simulate_to_file(&args.options(), &args.out)
-            .map(|rows| eprintln!("wrote {rows} rows to {}", args.out.display()))
-            .map_err(|e| commands::Failure::input(e.to_string())),
+        Command::Simulate(args) => simulate(&args),
         Command::Vehicle(args) => commands::vehicle_from_ulog(&args.from_ulog, args.out.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", e.message);
+            commands::print_err(&format!("error: {}", e.message));
             ExitCode::from(e.code)
         }
     }
+}
+
+/// `mrsysid simulate`: refuses an output that is the vehicle or rotor file, then writes.
+fn simulate(args: &SimulateArgs) -> Result<(), commands::Failure> {
+    let mut inputs = Vec::new();
+    inputs.extend(args.vehicle.iter().map(|p| ("vehicle file", p.as_path())));
+    inputs.extend(args.rotor.iter().map(|p| ("rotor file", p.as_path())));
+    commands::check_outputs(&[("--out", args.out.as_path())], &inputs)?;
+    let rows = simulate_to_file(&args.options(), &args.out)
+        .map_err(|e| commands::Failure::input(e.to_string()))?;
+    commands::print_err(&format!("wrote {rows} rows to {}", args.out.display()));
+    Ok(())
 }
 
 impl FitArgs {

@@ -644,8 +644,9 @@ fn merge(into: &mut Accumulator, other: &Accumulator) -> Result<(), Error> {
 
 /// The fit logs' statistics ((fit, held-out) per log, job order) arranged for
 /// cross-validation and the final fit: leave one log out with two or more logs, else the
-/// log's hold-out segments. Returns the folds and the final fit data: all fit logs, the
-/// held-out segments of a single log included only when validation logs report instead.
+/// log's hold-out segments (which `run` has checked hold samples). Returns the folds and
+/// the final fit data: all fit logs, the held-out segments of a single log included only
+/// when validation logs report instead.
 fn arrange(req: &FitRequest, parts: &[[&Accumulator; 2]]) -> Result<(Folds, Accumulator), Error> {
     let merged = |pair: &[&Accumulator; 2]| -> Result<Accumulator, Error> {
         let mut a = pair[0].clone();
@@ -653,13 +654,6 @@ fn arrange(req: &FitRequest, parts: &[[&Accumulator; 2]]) -> Result<(Folds, Accu
         Ok(a)
     };
     if let [single] = parts {
-        if single[1].count() == 0 {
-            return Err(RequestError::HoldoutTooShort {
-                segment_seconds: req.holdout.segment_seconds,
-                every: req.holdout.every,
-            }
-            .into());
-        }
         let folds = Folds::holdout("hold-out segments", single[0].clone(), single[1].clone());
         let fit = if req.validate.is_empty() {
             single[0].clone()
@@ -700,7 +694,42 @@ fn check(req: &FitRequest) -> Result<(), RequestError> {
     if structure != vehicle {
         return Err(RequestError::StructureMismatch { structure, vehicle });
     }
-    Ok(())
+    crate::inputs::check_logs(&req.logs, &req.validate)
+}
+
+/// The error of a single fit log none of whose samples was held out (`log`, read as
+/// `req.logs[0]`): its time looks logged in ms or µs (bad input), else it is too short
+/// for the hold-out, or sampled more coarsely than its segments.
+fn no_holdout(req: &FitRequest, log: &LogStats) -> Error {
+    let s = &log.summary;
+    let (span, median_step) = match &req.logs[0] {
+        LogSource::Memory(m) => {
+            let first = m.chunks().first().and_then(|c| c.t.first());
+            let last = m.chunks().last().and_then(|c| c.t.last());
+            (first.zip(last).map_or(0.0, |(a, b)| b - a), None)
+        }
+        LogSource::File(_) => (s.span, s.median_time_step),
+    };
+    let samples = log.fit.count() + log.held_out.count();
+    let consequence = ", so no sample falls in a held-out segment";
+    if let Some(text) = io::validate::time_unit_suspect(median_step, span, samples, consequence) {
+        return io::IoError::new(
+            &s.file,
+            io::Location::File,
+            None,
+            io::ErrorKind::Mapping(text),
+        )
+        .into();
+    }
+    RequestError::HoldoutTooShort {
+        log: s.file.clone(),
+        samples,
+        span,
+        median_step,
+        segment_seconds: req.holdout.segment_seconds,
+        every: req.holdout.every,
+    }
+    .into()
 }
 
 /// Runs the pipeline.
@@ -734,6 +763,11 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
         .collect();
     if parts.iter().all(|p| p[0].count() + p[1].count() == 0) {
         return Err(RequestError::NoSamples.into());
+    }
+    if let [single] = &parts[..]
+        && single[1].count() == 0
+    {
+        return Err(no_holdout(req, &per_log[0]));
     }
     let (folds, fit_stats) = arrange(req, &parts)?;
     let (summaries, spills): (Vec<Summary>, Vec<Option<Spill>>) =

@@ -253,14 +253,15 @@ fn malformed_mcap_inputs_get_specific_errors() {
     m.signals.rotor_speeds.as_mut().unwrap().topic = Some("/motors".into());
     assert_eq!(
         first_error(&path, &m),
-        "good.mcap: field \"/motors\": topic not in the file"
+        "good.mcap: field \"/motors\": topic not in the file (topics in the file: /esc, /imu)"
     );
     // A mapped field absent from the messages.
     let mut m = async_mapping();
     m.signals.rates.as_mut().unwrap().fields[1] = "gyro[7]".into();
     assert_eq!(
         first_error(&path, &m),
-        "good.mcap: message 0, field \"/imu.gyro[7]\": field not in the message"
+        "good.mcap: message 0, field \"/imu.gyro[7]\": field not in the message \
+         (gyro has 3 elements)"
     );
     // MCAP without a mapping file.
     let e = open_log(&path, &quad(0.0), None, &ReadOptions::default())

@@ -1,6 +1,7 @@
 //! Streaming CSV source: only the mapped columns parsed, memory bounded whatever the file
 //! size. A gzip-compressed file (`.csv.gz`, recognised by its magic bytes, not its name)
-//! is decompressed on the fly.
+//! is decompressed on the fly. Fields are separated by commas, or by `;` or tabs with
+//! decimal commas allowed (a European spreadsheet export; see `csv_input`).
 //!
 //! Turning text into numbers is the same work for every row, so the file is cut into
 //! byte ranges of whole records ([`crate::io::ReadOptions::range_bytes`], a size that
@@ -16,15 +17,14 @@
 
 use std::collections::VecDeque;
 use std::fs::File;
-use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::io::Read;
 use std::path::Path;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use flate2::read::MultiGzDecoder;
-
 use super::RowSource;
+use super::csv_input::{GzipPosition, decimal_comma_value, open_text};
 use super::decimal::{fast_path_in, parse_f64};
 use super::error::{ErrorKind, IoError, Location, column};
 use super::mapping::{Mapping, contract_mapping};
@@ -72,13 +72,17 @@ struct Columns {
     of_slot: Vec<usize>,
     /// Header width.
     header_len: usize,
+    /// Field delimiter: `,`, `;` or tab.
+    delimiter: u8,
 }
 
-/// A csv reader over whole records in memory, with the settings of every read here.
-fn tokeniser(bytes: &[u8]) -> csv::Reader<&[u8]> {
+/// A csv reader over whole records in memory, fields split at `delimiter`, with the
+/// settings of every read here.
+fn tokeniser(bytes: &[u8], delimiter: u8) -> csv::Reader<&[u8]> {
     csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
+        .delimiter(delimiter)
         .from_reader(bytes)
 }
 
@@ -134,7 +138,7 @@ impl Range {
             let line_text = &bytes[start..end];
             let record = line_text.strip_suffix(b"\r").unwrap_or(line_text);
             if !record.is_empty() {
-                field_ends(record, &mut ends);
+                field_ends(record, columns.delimiter, &mut ends);
                 let field = |c: usize| (if c == 0 { 0 } else { ends[c - 1] + 1 })..ends[c];
                 self.push_row(line, ends.len(), columns, record, field);
             }
@@ -147,7 +151,7 @@ impl Range {
     /// [`Range::parse`] through the csv tokeniser (quoted fields, lone CR line ends).
     fn parse_tokenised(&mut self, columns: &Columns) {
         let bytes = std::mem::take(&mut self.bytes);
-        let mut reader = tokeniser(&bytes);
+        let mut reader = tokeniser(&bytes, columns.delimiter);
         let mut record = csv::ByteRecord::new();
         loop {
             match reader.read_byte_record(&mut record) {
@@ -203,6 +207,12 @@ impl Range {
                 *v = x;
                 continue;
             }
+            if columns.delimiter != b','
+                && let Some(x) = decimal_comma_value(&text[range.clone()])
+            {
+                *v = x;
+                continue;
+            }
             let checked = *utf8.get_or_insert_with(|| std::str::from_utf8(text).ok());
             let parsed = match checked.and_then(|t| t.get(range.clone())) {
                 Some(f) => parse_text(f),
@@ -219,41 +229,43 @@ impl Range {
     }
 }
 
-/// Sets `ends` to the offset of every comma in `record`, then its length: field c ends
-/// at `ends[c]`. Eight bytes at a time.
-fn field_ends(record: &[u8], ends: &mut Vec<usize>) {
+/// Sets `ends` to the offset of every `delimiter` in `record`, then its length: field c
+/// ends at `ends[c]`. Eight bytes at a time.
+fn field_ends(record: &[u8], delimiter: u8, ends: &mut Vec<usize>) {
     ends.clear();
+    let pattern = u64::from(delimiter) * 0x0101_0101_0101_0101;
     let words = record.chunks_exact(8);
     let tail = words.remainder();
     for (w, word) in words.enumerate() {
-        let mut commas = comma_bytes(u64::from_le_bytes(word.try_into().unwrap_or_default()));
-        while commas != 0 {
-            ends.push(8 * w + commas.trailing_zeros() as usize / 8);
-            commas &= commas - 1;
+        let word = u64::from_le_bytes(word.try_into().unwrap_or_default());
+        let mut found = delimiter_bytes(word, pattern);
+        while found != 0 {
+            ends.push(8 * w + found.trailing_zeros() as usize / 8);
+            found &= found - 1;
         }
     }
     let base = record.len() - tail.len();
-    ends.extend(memchr::memchr_iter(b',', tail).map(|i| base + i));
+    ends.extend(memchr::memchr_iter(delimiter, tail).map(|i| base + i));
     ends.push(record.len());
 }
 
-/// 0x80 in each byte of `word` that is a comma, 0 in the others (exact: no carries
-/// between bytes).
-fn comma_bytes(word: u64) -> u64 {
+/// 0x80 in each byte of `word` equal to the delimiter whose byte `pattern` repeats eight
+/// times, 0 in the others (exact: no carries between bytes).
+fn delimiter_bytes(word: u64, pattern: u64) -> u64 {
     const LOW7: u64 = 0x7f7f_7f7f_7f7f_7f7f;
-    let x = word ^ 0x2c2c_2c2c_2c2c_2c2c;
+    let x = word ^ pattern;
     !(((x & LOW7) + LOW7) | x | LOW7)
 }
 
 /// Offset just past the last whole record of `bytes` (which start at a record start),
 /// if a record ends before the last one begins; see the module notes.
-fn range_end(bytes: &[u8]) -> Option<usize> {
+fn range_end(bytes: &[u8], delimiter: u8) -> Option<usize> {
     if memchr::memchr(b'"', bytes).is_none()
         && let Some(i) = memchr::memrchr(b'\n', bytes)
     {
         return Some(i + 1);
     }
-    let mut reader = tokeniser(bytes);
+    let mut reader = tokeniser(bytes, delimiter);
     let mut record = csv::ByteRecord::new();
     let mut last = 0;
     while let Ok(true) = reader.read_byte_record(&mut record) {
@@ -271,6 +283,12 @@ struct Cutter {
     eof: bool,
     /// Nominal range size, bytes (≥ 1).
     range_bytes: usize,
+    /// Field delimiter.
+    delimiter: u8,
+    /// Bytes of text read so far (decompressed, for a gzip-compressed file).
+    text_read: u64,
+    /// The compressed position reached, for a gzip-compressed file.
+    gzip: Option<GzipPosition>,
 }
 
 impl Cutter {
@@ -279,10 +297,40 @@ impl Cutter {
         if bytes.len() < want && !self.eof {
             let asked = (want - bytes.len()) as u64;
             bytes.reserve(want - bytes.len());
-            let got = self.input.by_ref().take(asked).read_to_end(bytes)?;
-            self.eof = (got as u64) < asked;
+            let before = bytes.len();
+            // On an error the bytes read before it are kept (`read_to_end`'s contract).
+            let got = self.input.by_ref().take(asked).read_to_end(bytes);
+            self.text_read += (bytes.len() - before) as u64;
+            self.eof = (got? as u64) < asked;
         }
         Ok(())
+    }
+
+    /// The first record (the header) of the text and the offset just past it, read into
+    /// `first` (which may hold text read already) with the cutter's delimiter: read on
+    /// until one more byte follows it (or the text ends), so that it is whole.
+    fn header(&mut self, first: &mut Vec<u8>) -> std::io::Result<(csv::ByteRecord, usize)> {
+        let mut want = self.range_bytes.min(1 << 16).max(first.len());
+        loop {
+            self.fill(first, want)?;
+            let mut reader = tokeniser(first, self.delimiter);
+            let mut record = csv::ByteRecord::new();
+            let found = reader.read_byte_record(&mut record).unwrap_or(false);
+            let end = reader.position().byte() as usize;
+            if self.eof || (found && end < first.len()) {
+                return Ok((record, end.min(first.len())));
+            }
+            want = 2 * first.len().max(self.range_bytes);
+        }
+    }
+
+    /// The text of read error `e`: with the compressed and text positions reached for a
+    /// gzip-compressed file.
+    fn describe(&self, e: &std::io::Error) -> String {
+        match &self.gzip {
+            Some(g) => g.describe(e, self.text_read),
+            None => e.to_string(),
+        }
     }
 
     /// Fills `bytes` with the next range (about `range_bytes`, more when one record is
@@ -296,7 +344,7 @@ impl Cutter {
             if self.eof {
                 return Ok(!bytes.is_empty());
             }
-            if let Some(end) = range_end(bytes) {
+            if let Some(end) = range_end(bytes, self.delimiter) {
                 self.carry.extend_from_slice(&bytes[end..]);
                 bytes.truncate(end);
                 return Ok(true);
@@ -384,8 +432,9 @@ pub struct CsvSource {
     fault: usize,
     /// Line of the first byte of `current` (1-based).
     first_line: u64,
-    /// A read error met while cutting, returned after the rows before it.
-    read_error: Option<IoError>,
+    /// A read error met while cutting, returned after the rows before it: its text, and
+    /// the line feeds of the text read in the range it broke.
+    read_error: Option<(String, u64)>,
     /// End of text (or a read error) was returned.
     finished: bool,
     /// Header names, for error labels.
@@ -408,36 +457,36 @@ impl CsvSource {
         let read_error = |e: std::io::Error| {
             IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
         };
-        let mut handle = File::open(path).map_err(read_error)?;
-        let input: Box<dyn Read + Send> = if is_gzip(&mut handle).map_err(read_error)? {
-            Box::new(MultiGzDecoder::new(BufReader::with_capacity(
-                1 << 16,
-                handle,
-            )))
-        } else {
-            Box::new(handle)
-        };
+        let (input, gzip) = open_text(path).map_err(read_error)?;
         let mut cutter = Cutter {
             input,
             carry: Vec::new(),
             eof: false,
             range_bytes: range_bytes.max(1),
+            delimiter: b',',
+            text_read: 0,
+            gzip,
         };
-        // The header is the first record: read on until one more byte follows it (or
-        // the text ends), so that it is whole.
+        // The header is the first record; one field holding `;` or tabs names the
+        // delimiter, and the header is read again with it.
         let mut first = Vec::new();
-        let mut want = cutter.range_bytes.min(1 << 16);
-        let (header_record, data_start) = loop {
-            cutter.fill(&mut first, want).map_err(read_error)?;
-            let mut reader = tokeniser(&first);
-            let mut record = csv::ByteRecord::new();
-            let found = reader.read_byte_record(&mut record).unwrap_or(false);
-            let end = reader.position().byte() as usize;
-            if cutter.eof || (found && end < first.len()) {
-                break (record, end.min(first.len()));
-            }
-            want = 2 * first.len().max(cutter.range_bytes);
+        let header_error = |cutter: &Cutter, first: &[u8], e: std::io::Error| {
+            let location = match cutter.gzip {
+                Some(_) => Location::Line(1 + memchr::memchr_iter(b'\n', first).count() as u64),
+                None => Location::File,
+            };
+            IoError::new(file, location, None, ErrorKind::Read(cutter.describe(&e)))
         };
+        let (mut header_record, mut data_start) = cutter
+            .header(&mut first)
+            .map_err(|e| header_error(&cutter, &first, e))?;
+        let delimiter = super::csv_input::delimiter(&header_record);
+        if delimiter != b',' {
+            cutter.delimiter = delimiter;
+            (header_record, data_start) = cutter
+                .header(&mut first)
+                .map_err(|e| header_error(&cutter, &first, e))?;
+        }
         if header_record.is_empty() || header_record.iter().all(|f| f.is_empty()) {
             return Err(IoError::new(
                 file,
@@ -486,6 +535,7 @@ impl CsvSource {
         let columns = Arc::new(Columns {
             of_slot,
             header_len: header.len(),
+            delimiter,
         });
         let workers = if parse_threads > 0 {
             Some(Workers::start(parse_threads, &columns).map_err(|e| {
@@ -527,12 +577,8 @@ impl CsvSource {
                 Ok(true) => {}
                 Ok(false) => break,
                 Err(e) => {
-                    self.read_error = Some(IoError::new(
-                        &self.file,
-                        Location::File,
-                        None,
-                        ErrorKind::Read(e.to_string()),
-                    ));
+                    let lines = memchr::memchr_iter(b'\n', &range.bytes).count() as u64;
+                    self.read_error = Some((self.cutter.describe(&e), lines));
                     break;
                 }
             }
@@ -576,7 +622,20 @@ impl CsvSource {
             Some(Pending::Worker(result)) => result.recv().map_err(|_| self.workers_stopped())?,
             None => {
                 self.finished = true;
-                return self.read_error.take().map_or(Ok(false), Err);
+                let Some((text, lines)) = self.read_error.take() else {
+                    return Ok(false);
+                };
+                // A gzip stream breaks at a place worth naming: the line it reached.
+                let location = match self.cutter.gzip {
+                    Some(_) => Location::Line(self.first_line + self.current.newlines + lines),
+                    None => Location::File,
+                };
+                return Err(IoError::new(
+                    &self.file,
+                    location,
+                    None,
+                    ErrorKind::Read(text),
+                ));
             }
         };
         self.first_line += self.current.newlines;
@@ -627,22 +686,6 @@ impl RowSource for CsvSource {
         raw[..n].copy_from_slice(&self.current.values[i * k..i * k + n]);
         Ok(Some((loc, None)))
     }
-}
-
-/// True when the file starts with the gzip magic bytes (RFC 1952): the CSV text is then
-/// decompressed on the fly. Leaves the file at its start.
-fn is_gzip(file: &mut File) -> std::io::Result<bool> {
-    let mut magic = [0u8; 2];
-    let mut n = 0;
-    while n < magic.len() {
-        let k = file.read(&mut magic[n..])?;
-        if k == 0 {
-            break;
-        }
-        n += k;
-    }
-    file.seek(SeekFrom::Start(0))?;
-    Ok(n == 2 && magic == [0x1f, 0x8b])
 }
 
 /// Parses one CSV field as f64 (surrounding spaces allowed), a field whose untrimmed text
@@ -754,6 +797,7 @@ mod tests {
         let columns = Columns {
             of_slot: vec![3, 0, 2, 5],
             header_len: 6,
+            delimiter: b',',
         };
         let pieces: [&[u8]; 12] = [
             b"1.5",
@@ -836,6 +880,7 @@ mod tests {
         let columns = Columns {
             of_slot: vec![0, 1],
             header_len: 2,
+            delimiter: b',',
         };
         for text in [
             &b"1,2\r3,4\n"[..],
@@ -867,7 +912,7 @@ mod tests {
     fn field_ends_are_the_commas() {
         let record = b"a,bc,,defghij,k,lmnopqrstu,v,";
         let mut ends = Vec::new();
-        field_ends(record, &mut ends);
+        field_ends(record, b',', &mut ends);
         let expected: Vec<usize> = record
             .iter()
             .enumerate()
@@ -879,7 +924,7 @@ mod tests {
         for b in 0..=255u8 {
             let word = u64::from_le_bytes([b, b',', b, 0x2c ^ 0x80, b, b'-', b'.', b]);
             let want = (0..8).filter(|&i| word.to_le_bytes()[i] == b',');
-            let got = comma_bytes(word);
+            let got = delimiter_bytes(word, 0x2c2c_2c2c_2c2c_2c2c);
             assert_eq!(got, want.map(|i| 0x80u64 << (8 * i)).sum::<u64>(), "{b:#x}");
         }
     }

@@ -69,6 +69,9 @@ pub enum ErrorKind {
     /// An asynchronous topic has no messages close enough to align with the time base;
     /// the sample is always dropped and counted (never bridged).
     NotAligned(String),
+    /// The log's samples are too few, or its segments too short, to support a fit (the
+    /// text says what is short and what is needed).
+    TooShort(String),
 }
 
 impl IoError {
@@ -109,6 +112,7 @@ impl IoError {
             ErrorKind::Time { .. } => "time not strictly increasing",
             ErrorKind::Mapping(_) => "mapping",
             ErrorKind::NotAligned(_) => "topic not aligned within max_gap",
+            ErrorKind::TooShort(_) => "too short",
         }
     }
 }
@@ -162,9 +166,11 @@ impl fmt::Display for ErrorKind {
         match self {
             Self::Read(m) => write!(f, "cannot read: {m}"),
             Self::Empty => f.write_str("no data rows"),
-            Self::Format(m) | Self::MissingSignal(m) | Self::Mapping(m) | Self::NotAligned(m) => {
-                f.write_str(m)
-            }
+            Self::Format(m)
+            | Self::MissingSignal(m)
+            | Self::Mapping(m)
+            | Self::NotAligned(m)
+            | Self::TooShort(m) => f.write_str(m),
             Self::NotANumber(text) => write!(f, "not a number ({text:?})"),
             Self::NotFinite(v) => write!(f, "not a finite number ({v})"),
             Self::OutOfRange { value, range } => {

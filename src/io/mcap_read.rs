@@ -12,7 +12,7 @@
 //! by the streaming linear reader, and a message more than `max_gap` earlier than one
 //! already read is an error saying the file must be indexed or sorted.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{BTreeSet, HashMap, VecDeque};
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -72,6 +72,41 @@ fn lookup<'v>(value: &'v Value, steps: &[Step]) -> Option<&'v Value> {
         Step::Key(k) => v.get(k),
         Step::Index(i) => v.get(*i),
     })
+}
+
+/// What `value` has where the path `steps` leaves it, e.g. `gyro has 3 elements`, `the
+/// message has fields f, gyro, vel`; empty when the path is in it.
+fn what_is_there(value: &Value, steps: &[Step]) -> String {
+    let mut v = value;
+    let mut path = String::new();
+    for step in steps {
+        let next = match step {
+            Step::Key(k) => v.get(k),
+            Step::Index(i) => v.get(*i),
+        };
+        let Some(next) = next else {
+            let here = if path.is_empty() {
+                "the message".to_string()
+            } else {
+                path
+            };
+            return match v {
+                Value::Object(map) => {
+                    let keys: Vec<&str> = map.keys().map(String::as_str).collect();
+                    format!("{here} has fields {}", keys.join(", "))
+                }
+                Value::Array(items) => format!("{here} has {} elements", items.len()),
+                other => format!("{here} is {other}, not an object or array"),
+            };
+        };
+        match step {
+            Step::Key(k) if path.is_empty() => path = k.clone(),
+            Step::Key(k) => path = format!("{path}.{k}"),
+            Step::Index(i) => path = format!("{path}[{i}]"),
+        }
+        v = next;
+    }
+    String::new()
 }
 
 /// A number, or a ROS time `{sec, nanosec}` / `{secs, nsecs}` in seconds.
@@ -195,6 +230,8 @@ pub struct McapSource {
     /// Schemas by id: (name, encoding, text).
     schemas: HashMap<u16, (String, String, Vec<u8>)>,
     topics: Vec<Topic>,
+    /// Every channel topic of the file seen so far.
+    file_topics: BTreeSet<String>,
     base: usize,
     max_gap: f64,
     message_index: u64,
@@ -333,6 +370,7 @@ impl McapSource {
             channel_topic: HashMap::new(),
             schemas: HashMap::new(),
             topics,
+            file_topics: BTreeSet::new(),
             base,
             max_gap,
             message_index: 0,
@@ -372,6 +410,7 @@ impl McapSource {
         encoding: &str,
         schema_id: u16,
     ) -> Result<(), IoError> {
+        self.file_topics.insert(topic.to_string());
         let mapped = self.topics.iter().position(|t| t.name == topic);
         if let Some(t) = mapped {
             let decoder = self.decoder_for(topic, encoding, schema_id)?;
@@ -451,11 +490,25 @@ impl McapSource {
                 None => return Ok(false),
                 Some(Err(e)) => {
                     let index = self.message_index;
-                    return Err(self.err(
-                        Location::Record(index),
-                        None,
-                        ErrorKind::Format(format!("MCAP: {e}")),
-                    ));
+                    // A file that ends before its first message (the magic bytes alone,
+                    // a cut header) has no message to name: the byte it ends at is.
+                    let ended = self.handle.stream_position().ok().filter(|&at| {
+                        index == 0 && self.handle.metadata().is_ok_and(|m| m.len() == at)
+                    });
+                    return Err(match ended {
+                        Some(at) => self.err(
+                            Location::Offset(at),
+                            None,
+                            ErrorKind::Format(format!(
+                                "MCAP: {e}: the file ends at byte {at}, before any message"
+                            )),
+                        ),
+                        None => self.err(
+                            Location::Record(index),
+                            None,
+                            ErrorKind::Format(format!("MCAP: {e}")),
+                        ),
+                    });
                 }
                 Some(Ok(ev)) => ev,
             };
@@ -557,11 +610,13 @@ impl McapSource {
                 )
             })?,
             _ => serde_json::from_slice(data).map_err(|e| {
-                self.err(
-                    loc,
-                    field(&name),
-                    ErrorKind::Format(format!("invalid JSON: {e}")),
-                )
+                let (path, text) = super::json_error::describe(data, &e);
+                let label = if path.is_empty() {
+                    name.clone()
+                } else {
+                    format!("{name}.{path}")
+                };
+                self.err(loc, field(&label), ErrorKind::Format(text))
             })?,
         };
         let t = match &self.topics[topic].time {
@@ -583,7 +638,10 @@ impl McapSource {
                 self.err(
                     loc,
                     field(&format!("{name}.{path}")),
-                    ErrorKind::MissingSignal("field not in the message".into()),
+                    ErrorKind::MissingSignal(format!(
+                        "field not in the message ({})",
+                        what_is_there(&value, steps)
+                    )),
                 )
             })?;
             values.push(v.as_f64().ok_or_else(|| {
@@ -645,10 +703,17 @@ impl RowSource for McapSource {
                 if !self.read_message()? {
                     self.eof = true;
                     if let Some(t) = self.topics.iter().find(|t| !t.seen) {
+                        let has = if self.file_topics.is_empty() {
+                            "the file has no channels".to_string()
+                        } else {
+                            let names: Vec<&str> =
+                                self.file_topics.iter().map(String::as_str).collect();
+                            format!("topics in the file: {}", names.join(", "))
+                        };
                         return Err(self.err(
                             Location::File,
                             field(&t.name),
-                            ErrorKind::MissingSignal("topic not in the file".into()),
+                            ErrorKind::MissingSignal(format!("topic not in the file ({has})")),
                         ));
                     }
                 }

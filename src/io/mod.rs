@@ -13,9 +13,11 @@
 
 pub mod cdr;
 pub mod contract_csv;
+pub mod csv_input;
 pub mod decimal;
 pub mod derive;
 pub mod error;
+pub mod json_error;
 pub mod layout;
 pub mod mapping;
 pub mod mcap_read;
@@ -141,6 +143,12 @@ pub struct Summary {
     pub derived: Vec<String>,
     /// Warnings about implausible units.
     pub unit_warnings: Vec<String>,
+    /// Median step between the times of consecutive rows read, s (`None` with fewer
+    /// than two, and for a log in memory): a sample interval, or a test point's spacing
+    /// in a sweep.
+    pub median_time_step: Option<f64>,
+    /// Time from the first row read to the last, s (0 for a log in memory).
+    pub span: f64,
     /// Motor layout inferred from moments vs individual rotor speeds.
     pub layout: Option<LayoutReport>,
 }
@@ -225,6 +233,8 @@ struct VehicleFacts {
     inertia: [[f64; 3]; 3],
     rotor_inertia: f64,
     arm: f64,
+    rotor_radius: f64,
+    air_density: f64,
 }
 
 /// How each output signal is obtained.
@@ -426,6 +436,8 @@ impl LogReader {
             inertia: vehicle.props.inertia,
             rotor_inertia: vehicle.props.rotor_inertia,
             arm: vehicle.arm_length(),
+            rotor_radius: vehicle.props.rotor_radius,
+            air_density: vehicle.props.air_density,
         };
         let needs_ang_acc = !layout.has(Signal::Moment) || opts.derive.imu_lever_arm.is_some();
         let diff_rates = needs_ang_acc && !layout.has(Signal::AngularAcceleration);
@@ -599,6 +611,7 @@ impl LogReader {
         };
         self.convert(row)
             .map_err(|(slot, kind)| IoError::new(file, loc, self.label(slot), kind))?;
+        self.unit_stats.time(row.t);
         Ok(true)
     }
 
@@ -1023,10 +1036,32 @@ impl LogReader {
         }
     }
 
-    fn finish_summary(&mut self) {
+    /// Completes the summary at the end of the log; refuses rotor speeds whose blade
+    /// tips would be supersonic (RPM logged as rad/s).
+    fn finish_summary(&mut self) -> Result<(), IoError> {
         self.summary.layout = self.layout_acc.finish();
         self.summary.unit_warnings = self.unit_stats.warnings();
         self.summary.dropouts = self.source.dropouts().to_vec();
+        self.summary.median_time_step = self.unit_stats.median_time_step();
+        self.summary.span = self.unit_stats.span();
+        let v = &self.vehicle;
+        match self
+            .unit_stats
+            .rotor_speed_check(v.rotors, v.rotor_radius, v.mass, v.air_density)
+        {
+            Ok(note) => self.summary.unit_warnings.extend(note),
+            Err(why) => {
+                return Err(IoError::new(
+                    &self.summary.file,
+                    Location::File,
+                    self.layout
+                        .start(Signal::RotorSpeeds)
+                        .and_then(|slot| self.label(slot)),
+                    ErrorKind::Mapping(why),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Fills `chunk` with the next chunk (true), or finds the end (false).
@@ -1053,14 +1088,15 @@ impl LogReader {
                     Some(row) => self.window.push_back(row),
                     None => {
                         if self.summary.samples == 0 {
-                            return Err(IoError::new(
-                                &self.summary.file,
-                                Location::File,
-                                None,
-                                ErrorKind::Empty,
+                            self.summary.median_time_step = self.unit_stats.median_time_step();
+                            self.summary.span = self.unit_stats.span();
+                            return Err(validate::no_samples_error(
+                                &self.summary,
+                                &self.opts,
+                                self.time_label(),
                             ));
                         }
-                        self.finish_summary();
+                        self.finish_summary()?;
                         return Ok(false);
                     }
                 }

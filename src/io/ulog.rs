@@ -672,6 +672,8 @@ pub struct UlogSource {
     /// Subscribed msg ids: the mapped topic they feed, if any.
     subscriptions: HashMap<u16, Option<usize>>,
     logged: BTreeSet<String>,
+    /// `D` data messages read, of any topic.
+    data_messages: u64,
     topics: Vec<Topic>,
     base: usize,
     align_gap: f64,
@@ -773,6 +775,7 @@ impl UlogSource {
             formats: Formats::default(),
             subscriptions: HashMap::new(),
             logged: BTreeSet::new(),
+            data_messages: 0,
             topics,
             base,
             align_gap,
@@ -943,6 +946,7 @@ impl UlogSource {
             ));
         }
         let msg_id = u16::from_le_bytes([b[0], b[1]]);
+        self.data_messages += 1;
         let j = match self.subscriptions.get(&msg_id) {
             Some(Some(j)) => *j,
             Some(None) => return Ok(false),
@@ -1020,7 +1024,14 @@ impl RowSource for UlogSource {
                     self.eof = true;
                     if let Some(t) = self.topics.iter().find(|t| t.messages == 0) {
                         let logged: Vec<&str> = self.logged.iter().map(String::as_str).collect();
-                        let text = if t.seen {
+                        let text = if self.data_messages == 0 {
+                            let subscribed = if logged.is_empty() {
+                                "no topic is subscribed".to_string()
+                            } else {
+                                format!("subscribed topics: {}", logged.join(", "))
+                            };
+                            format!("the log has no data messages ({subscribed})")
+                        } else if t.seen {
                             "topic is subscribed but has no data messages in the log".to_string()
                         } else {
                             format!(

@@ -1,7 +1,11 @@
 //! Physical-range checks of logged values, spike flagging (Hampel filter) and unit
-//! plausibility heuristics.
+//! plausibility heuristics: the blade-tip Mach number and hover thrust coefficient of the
+//! rotor speeds (RPM logged as rad/s), the sample interval and span of the time (ms or
+//! µs logged as s), the mean specific force, the body rates.
 
+use super::error::{ErrorKind, IoError, Location};
 use super::mapping::Signal;
+use super::{ReadOptions, Summary};
 use crate::vehicle::STANDARD_GRAVITY;
 
 /// Admissible range of one component of `signal` in SI units, for a vehicle of mass
@@ -77,6 +81,177 @@ pub fn is_spike(window: &mut [f64], floor: f64) -> bool {
     (centre - median).abs() > (SPIKE_SIGMAS * 1.4826 * mad).max(floor)
 }
 
+/// Speed of sound of the blade-tip check, m/s (ISA sea level, 15 °C; colder air has a
+/// lower one, so a tip above Mach 1 by this figure is above it in any flight air).
+pub const SPEED_OF_SOUND: f64 = 340.294;
+
+/// Largest plausible Mach number of a blade tip at the typical (median) rotor speed of a
+/// log: propellers of multirotors run at about 0.2–0.7.
+pub const MAX_TIP_MACH: f64 = 1.0;
+
+/// Smallest plausible hover thrust coefficient C_T = m g / (n ρ π R⁴ Ω²) at the median
+/// rotor speed (propellers have about 0.005–0.03; RPM read as rad/s gives 91 times less).
+pub const MIN_HOVER_THRUST_COEFFICIENT: f64 = 1e-3;
+
+/// One revolution per minute, rad/s.
+const RPM: f64 = std::f64::consts::PI / 30.0;
+
+/// Bins per octave of [`Median`] (2.2 % wide).
+const MEDIAN_BINS_PER_OCTAVE: u32 = 32;
+/// Smallest binary exponent of [`Median`]: values below 2⁻⁴⁰ (9e-13) share its first bin.
+const MEDIAN_MIN_EXPONENT: i64 = -40;
+/// Octaves of [`Median`]: values above 2⁴⁰ (1.1e12) share its last bin.
+const MEDIAN_OCTAVES: usize = 80;
+
+/// The median of positive values in bounded memory (40 kB however many): counts in bins
+/// 1/32 octave wide, each keeping the first value that fell in it; the median is the
+/// value kept in the bin of the middle value — exact when the values repeat (sample
+/// intervals, hover speeds), else within 2.2 %. A bin is found from the value's bits
+/// (exponent and top mantissa bits), with no logarithm.
+#[derive(Debug, Clone, Default)]
+pub struct Median {
+    counts: Vec<u64>,
+    values: Vec<f64>,
+    total: u64,
+}
+
+impl Median {
+    /// Adds `x`; values that are not finite and positive are ignored.
+    pub fn push(&mut self, x: f64) {
+        if !(x > 0.0 && x.is_finite()) {
+            return;
+        }
+        let bins = MEDIAN_OCTAVES * MEDIAN_BINS_PER_OCTAVE as usize;
+        if self.counts.is_empty() {
+            self.counts = vec![0; bins];
+            self.values = vec![0.0; bins];
+        }
+        let shift = 52 - MEDIAN_BINS_PER_OCTAVE.trailing_zeros();
+        let first =
+            ((1023 + MEDIAN_MIN_EXPONENT) as u64) << MEDIAN_BINS_PER_OCTAVE.trailing_zeros();
+        let bin = ((x.to_bits() >> shift).saturating_sub(first) as usize).min(bins - 1);
+        if self.counts[bin] == 0 {
+            self.values[bin] = x;
+        }
+        self.counts[bin] += 1;
+        self.total += 1;
+    }
+
+    /// Values added.
+    pub fn count(&self) -> u64 {
+        self.total
+    }
+
+    /// The value kept in the bin of the ⌈n/2⌉-th smallest value; `None` when empty.
+    pub fn median(&self) -> Option<f64> {
+        let half = self.total.div_ceil(2);
+        let mut seen = 0;
+        for (count, value) in self.counts.iter().zip(&self.values) {
+            seen += count;
+            if *count > 0 && seen >= half {
+                return Some(*value);
+            }
+        }
+        None
+    }
+}
+
+/// `x` with at most three decimals (trailing zeros dropped), or in exponent form when it
+/// is below 0.001 or above 10⁷.
+fn short(x: f64) -> String {
+    if x != 0.0 && !(1e-3..1e7).contains(&x.abs()) {
+        return format!("{x:.3e}");
+    }
+    let text = format!("{x:.3}");
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// `x` to about four significant figures: whole for 1000 and more, else three decimals
+/// at most ([`short`]).
+fn about(x: f64) -> String {
+    if x.abs() >= 1000.0 {
+        format!("{x:.0}")
+    } else {
+        short((x * 1000.0).round() / 1000.0)
+    }
+}
+
+/// Why the time of a log looks logged in ms, µs or ns rather than seconds — its samples
+/// `median_step` s apart (median), more than 1 s (under 1 Hz, no flight log), or its
+/// `samples` samples spanning more than a day — with the unit to declare: the
+/// diagnosis, `consequence` (e.g. ", so …"), and the remedy. `None` when it looks like
+/// seconds (a test-point sweep numbering its points 0, 1, 2 … is not flagged).
+pub fn time_unit_suspect(
+    median_step: Option<f64>,
+    span: f64,
+    samples: u64,
+    consequence: &str,
+) -> Option<String> {
+    let step = median_step?;
+    if !(step > 1.0 || span > 86_400.0) {
+        return None;
+    }
+    let (word, unit) = [
+        ("milliseconds", "ms", 1e-3),
+        ("microseconds", "us", 1e-6),
+        ("nanoseconds", "ns", 1e-9),
+    ]
+    .into_iter()
+    .find(|u| step * u.2 <= 0.1)
+    .map_or(("nanoseconds", "ns"), |u| (u.0, u.1));
+    Some(format!(
+        "time looks like {word}, not seconds: the median time step is {} s ({} Hz) and the \
+         {samples} samples span {} s ({} h){consequence}; declare the unit in a mapping file \
+         ([time] unit = \"{unit}\", docs/mapping.md)",
+        short(step),
+        short(1.0 / step),
+        short(span),
+        short(span / 3600.0),
+    ))
+}
+
+/// The error of a log that gave no sample (`summary` complete, read with `opts`):
+/// empty, or every row dropped. A log whose rows were all dropped because their
+/// segments are too short to differentiate cannot support a fit
+/// ([`ErrorKind::TooShort`]), unless its time looks logged in ms or µs (the label of its
+/// time field is `time_label`), which made every step a gap.
+pub fn no_samples_error(
+    summary: &Summary,
+    opts: &ReadOptions,
+    time_label: Option<String>,
+) -> IoError {
+    let s = summary;
+    let file = s.file.as_str();
+    let too_short = "segment too short to differentiate";
+    if s.rows_read == 0 || s.dropped.keys().any(|k| k != too_short) {
+        return IoError::new(file, Location::File, None, ErrorKind::Empty);
+    }
+    let rows = match s.rows_read {
+        1 => "the 1 row read was dropped".to_string(),
+        n => format!("all {n} rows read were dropped"),
+    };
+    let consequence = format!(
+        ", so every step is a gap that leaves each sample a segment of its own, too short to \
+         differentiate ({rows})"
+    );
+    if let Some(text) = time_unit_suspect(s.median_time_step, s.span, s.rows_read, &consequence) {
+        return IoError::new(file, Location::File, time_label, ErrorKind::Mapping(text));
+    }
+    let order = opts.derive.sg_order;
+    IoError::new(
+        file,
+        Location::File,
+        None,
+        ErrorKind::TooShort(format!(
+            "no sample left: {rows}, every segment being too short to differentiate (with \
+             sg_order {order} a segment needs at least {} samples, and a time step longer than \
+             max_gap = {} s starts a new segment)",
+            order + 1,
+            opts.max_gap
+        )),
+    )
+}
+
 /// Statistics gathered while reading, to flag implausible units.
 #[derive(Debug, Clone, Default)]
 pub struct UnitStats {
@@ -85,6 +260,12 @@ pub struct UnitStats {
     max_rate: f64,
     max_omega: f64,
     sum_omega: f64,
+    /// Mean rotor speed of each sample with turning rotors, rad/s.
+    rotor_speed: Median,
+    /// Steps between the times of consecutive rows read, s.
+    time_steps: Median,
+    /// Times of the first and the last row read, s.
+    times: Option<(f64, f64)>,
 }
 
 impl UnitStats {
@@ -96,10 +277,96 @@ impl UnitStats {
         for r in rates {
             self.max_rate = self.max_rate.max(r.abs());
         }
+        let mut sum = 0.0;
         for &w in omega {
             self.max_omega = self.max_omega.max(w);
             self.sum_omega += w / omega.len() as f64;
+            sum += w;
         }
+        self.rotor_speed.push(sum / omega.len() as f64);
+    }
+
+    /// Adds the time of a row read, s (rows in reading order).
+    pub fn time(&mut self, t: f64) {
+        match &mut self.times {
+            None => self.times = Some((t, t)),
+            Some((_, last)) => {
+                if t > *last {
+                    self.time_steps.push(t - *last);
+                }
+                *last = t;
+            }
+        }
+    }
+
+    /// Median step between the times of consecutive rows read, s; `None` with fewer
+    /// than two.
+    pub fn median_time_step(&self) -> Option<f64> {
+        self.time_steps.median()
+    }
+
+    /// Time from the first row read to the last, s (0 with fewer than two).
+    pub fn span(&self) -> f64 {
+        self.times.map_or(0.0, |(first, last)| last - first)
+    }
+
+    /// The blade-tip check of the rotor speeds, for `rotors` rotors of radius `radius`
+    /// (m) on a vehicle of `mass` (kg) in air of `density` (kg/m³): `Err(why)` when the
+    /// median rotor speed puts the tips above [`MAX_TIP_MACH`] (rotor speeds in RPM or
+    /// eRPM read as rad/s), with the unit to declare; `Ok(Some(note))` when the tips are
+    /// subsonic but hovering at that speed would need a thrust coefficient below
+    /// [`MIN_HOVER_THRUST_COEFFICIENT`]; else `Ok(None)`.
+    pub fn rotor_speed_check(
+        &self,
+        rotors: usize,
+        radius: f64,
+        mass: f64,
+        density: f64,
+    ) -> Result<Option<String>, String> {
+        let Some(omega) = self.rotor_speed.median() else {
+            return Ok(None);
+        };
+        let mach = |w: f64| w * radius / SPEED_OF_SOUND;
+        // Hover: m g = n C_T ρ π R² (Ω R)².
+        let hover_ct = |w: f64| {
+            mass * STANDARD_GRAVITY
+                / (rotors as f64 * density * std::f64::consts::PI * radius.powi(4) * w * w)
+        };
+        if mach(omega) > MAX_TIP_MACH {
+            let (what, unit) = if mach(omega * RPM) <= MAX_TIP_MACH {
+                ("RPM", "unit = \"rpm\"")
+            } else {
+                (
+                    "electrical RPM (eRPM)",
+                    "unit = \"erpm\" with pole_pairs = the motor's pole pairs",
+                )
+            };
+            return Err(format!(
+                "rotor speeds look like {what}, not rad/s: the median rotor speed {} rad/s \
+                 puts the blade tips (R = {radius} m) at {} m/s, Mach {:.2}, and hovering at it \
+                 would need a thrust coefficient C_T = m g/(n rho pi R^4 Omega^2) of {:.2e} \
+                 (propellers have about 0.005 to 0.03); read as RPM it is {} rad/s, Mach \
+                 {:.2}, C_T {:.2e}; declare the unit in a mapping file \
+                 ([signals.rotor_speeds] {unit}, docs/mapping.md)",
+                about(omega),
+                about(omega * radius),
+                mach(omega),
+                hover_ct(omega),
+                about(omega * RPM),
+                mach(omega * RPM),
+                hover_ct(omega * RPM),
+            ));
+        }
+        let ct = hover_ct(omega);
+        Ok((ct < MIN_HOVER_THRUST_COEFFICIENT).then(|| {
+            format!(
+                "median rotor speed {} rad/s is high for the vehicle's weight: hovering at it \
+                 would need a thrust coefficient C_T = m g/(n rho pi R^4 Omega^2) of {ct:.2e} \
+                 (propellers have about 0.005 to 0.03): rotor speeds logged in RPM? (a mapping \
+                 with [signals.rotor_speeds] unit = \"rpm\")",
+                about(omega)
+            )
+        }))
     }
 
     /// Human-readable warnings about units that look wrong.
@@ -129,6 +396,13 @@ impl UnitStats {
                  (rotor speeds logged in rev/s or kRPM?)"
             ));
         }
+        let steps = self.time_steps.count() + 1;
+        out.extend(time_unit_suspect(
+            self.median_time_step(),
+            self.span(),
+            steps,
+            " (a test-point sweep whose t only numbers its points may ignore this)",
+        ));
         out
     }
 }
@@ -143,5 +417,90 @@ mod tests {
         assert!(is_spike(&mut spike, 0.5));
         let mut ramp = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
         assert!(!is_spike(&mut ramp, 0.5));
+    }
+
+    /// Repeated values give their exact median; spread ones a value within one bin
+    /// (2.2 %) of the true median; values that are not positive and finite are ignored.
+    #[test]
+    fn median_of_binned_values() {
+        let mut m = Median::default();
+        assert_eq!(m.median(), None);
+        for x in [0.01, 0.01, 5.0, 0.01, 0.0, -1.0, f64::NAN, 1e-30, 1e30] {
+            m.push(x);
+        }
+        assert_eq!(m.count(), 6);
+        assert_eq!(m.median(), Some(0.01));
+        let mut spread = Median::default();
+        for k in 1..=1001 {
+            spread.push(k as f64);
+        }
+        let median = spread.median().unwrap();
+        assert!((median / 501.0 - 1.0).abs() < 0.022, "{median}");
+    }
+
+    /// 100 Hz in ms and 250 Hz in µs are named; seconds at 100 Hz and a test-point sweep
+    /// numbered 0, 1, 2 … are not; 1 kHz in ms is named by its span of days.
+    #[test]
+    fn time_units_named_from_step_and_span() {
+        let ms = time_unit_suspect(Some(10.0), 19_990.0, 2000, ", so X").unwrap();
+        assert!(ms.starts_with("time looks like milliseconds, not seconds: the median time step is 10 s (0.1 Hz) and the 2000 samples span 19990 s (5.553 h), so X; "), "{ms}");
+        assert!(
+            ms.ends_with("([time] unit = \"ms\", docs/mapping.md)"),
+            "{ms}"
+        );
+        let us = time_unit_suspect(Some(4000.0), 4e7, 10_000, "").unwrap();
+        assert!(
+            us.contains("microseconds") && us.contains("unit = \"us\""),
+            "{us}"
+        );
+        assert_eq!(time_unit_suspect(Some(0.01), 600.0, 60_000, ""), None);
+        assert_eq!(time_unit_suspect(Some(1.0), 1999.0, 2000, ""), None);
+        assert_eq!(time_unit_suspect(None, 0.0, 1, ""), None);
+        let khz = time_unit_suspect(Some(1.0), 600_000.0, 600_001, "").unwrap();
+        assert!(khz.contains("milliseconds"), "{khz}");
+    }
+
+    /// The shipped quad's hover (2168 rad/s, R = 0.0635 m: Mach 0.40, C_T 0.010) passes;
+    /// the same in RPM on 4.5-inch rotors is refused (Mach 3.4), in eRPM of 7 pole pairs
+    /// too, naming eRPM; RPM too slow for Mach 1 on a light vehicle gets a note from the
+    /// thrust coefficient alone; spikes above Mach 1 in a few samples do not move the
+    /// median.
+    #[test]
+    fn rotor_speed_check_by_tip_mach_and_hover_thrust() {
+        let stats = |speeds: &[f64]| {
+            let mut s = UnitStats::default();
+            for &w in speeds {
+                s.push([0.0, 0.0, -11.77], 1.2, [0.0; 3], &[w; 4]);
+            }
+            s
+        };
+        let mut hover = vec![2167.7; 100];
+        hover.extend([9000.0; 10]);
+        assert_eq!(
+            stats(&hover).rotor_speed_check(4, 0.0635, 1.2, 1.225),
+            Ok(None)
+        );
+        let rpm = 2167.7 / RPM;
+        let e = stats(&[rpm; 10])
+            .rotor_speed_check(4, 0.0565, 1.2, 1.225)
+            .unwrap_err();
+        assert!(
+            e.starts_with("rotor speeds look like RPM, not rad/s: the median rotor speed 20700"),
+            "{e}"
+        );
+        assert!(
+            e.contains("Mach 3.44") && e.contains("unit = \"rpm\""),
+            "{e}"
+        );
+        let e = stats(&[7.0 * rpm; 10])
+            .rotor_speed_check(4, 0.0635, 1.2, 1.225)
+            .unwrap_err();
+        assert!(e.contains("eRPM") && e.contains("unit = \"erpm\""), "{e}");
+        // 3000 RPM on a 0.25 kg vehicle with 8-inch rotors: Mach 0.88, C_T 1.8e-4.
+        let note = stats(&[3000.0; 10])
+            .rotor_speed_check(4, 0.1, 0.25, 1.225)
+            .unwrap()
+            .unwrap();
+        assert!(note.contains("rotor speeds logged in RPM?"), "{note}");
     }
 }
