@@ -13,7 +13,7 @@ use mrsysid::identified::IdentifiedModel;
 use mrsysid::inputs::same_file;
 use mrsysid::io::{self, InvalidSamples, Mapping, ReadOptions};
 use mrsysid::model::{ModelOptions, Workspace};
-use mrsysid::pipeline::{FitOutcome, Holdout, PlotSeries};
+use mrsysid::pipeline::{FitOutcome, Holdout, PlotSeries, stream_for_model};
 use mrsysid::report::plots::{self, AxisSeries, NormalProbability, ResidualDensity};
 use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
@@ -431,6 +431,18 @@ fn normal_points(d: &ResidualDiagnostics) -> Vec<NormalProbability> {
         .collect()
 }
 
+/// A failure of `predict` or `validate` on `log`: bad input (exit 2), the log named
+/// where the library's error does not name it already.
+fn naming_the_log(log: &Path, e: mrsysid::Error) -> Failure {
+    match e {
+        mrsysid::Error::Model(m) => Failure::input(format!("{}: {m}", log.display())),
+        mrsysid::Error::Accumulate { .. } | mrsysid::Error::Input(_) => {
+            Failure::input(e.to_string())
+        }
+        other => Failure::from(other),
+    }
+}
+
 /// `mrsysid predict`: model output per sample of a log, as CSV.
 pub fn predict(
     model: &Path,
@@ -443,15 +455,10 @@ pub fn predict(
     check_outputs(&[("--out", out)], &inputs)?;
     let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
-    let mut reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
-        .map_err(|e| Failure::input(e.to_string()))?;
     let mut text = String::from("t,fx,fy,fz,mx,my,mz\n");
     let mut ws = Workspace::default();
-    while let Some(chunk) = reader.next_chunk() {
-        let chunk = chunk?;
-        let y = m
-            .predict_chunk(chunk, &mut ws)
-            .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
+    stream_for_model(&m, log, mapping.as_ref(), |chunk| {
+        let y = m.predict_chunk(chunk, &mut ws)?;
         for k in 0..chunk.len() {
             text.push_str(&format!("{}", chunk.t[k]));
             for col in &y {
@@ -459,7 +466,9 @@ pub fn predict(
             }
             text.push('\n');
         }
-    }
+        Ok(())
+    })
+    .map_err(|e| naming_the_log(log, e))?;
     write_atomically(out, text.as_bytes())
         .map_err(|e| Failure::input(format!("{}: cannot write: {e}", out.display())))
 }
@@ -481,13 +490,14 @@ pub fn validate(
     let mut acc = Accumulator::new(&m.structure);
     let mut ws = Workspace::default();
     for log in logs {
-        let mut reader = io::open_log(log, &m.vehicle, mapping.as_ref(), &ReadOptions::default())
-            .map_err(|e| Failure::input(e.to_string()))?;
-        while let Some(chunk) = reader.next_chunk() {
-            let chunk = chunk?;
+        stream_for_model(&m, log, mapping.as_ref(), |chunk| {
             acc.push(&m.structure, chunk, &mut ws)
-                .map_err(|e| Failure::input(format!("{}: {e}", log.display())))?;
-        }
+                .map_err(|e| mrsysid::Error::Accumulate {
+                    log: log.display().to_string(),
+                    source: e,
+                })
+        })
+        .map_err(|e| naming_the_log(log, e))?;
     }
     if acc.count() == 0 {
         return Err(Failure::fit("no samples in the validation logs".into()));

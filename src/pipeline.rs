@@ -28,6 +28,7 @@ use crate::estimate::{
     self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, FitOptions, Folds,
     ResidualDiagnostics, ResidualPass,
 };
+use crate::identified::IdentifiedModel;
 use crate::io::derive::{JerkScratch, rotor_jerk};
 use crate::io::{self, DeriveOptions, LogReader, Mapping, ReadOptions, Summary};
 use crate::model::{ModelStructure, Reuse, Workspace};
@@ -285,7 +286,7 @@ fn stream_log(
     share: usize,
     consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
 ) -> Result<Summary, Error> {
-    let mut feed = Feed::new(req, consume);
+    let mut feed = Feed::of_fit(req, consume);
     let path = match source {
         LogSource::File(path) => path,
         LogSource::Memory(log) => {
@@ -355,34 +356,52 @@ fn stream_log(
 }
 
 /// What happens to each chunk of a log before its consumer sees it: Ω̈ derived from Ω̇
-/// ([`rotor_jerk`]), progress counted and, for a diagnosis, the slow rotor thrusts of
-/// the trim-moment candidates filled in ([`SlowThrust`]; chunks then reach the consumer
-/// up to a few seconds of samples later, in order, the last ones at [`Feed::finish`]).
-struct Feed<'r, C> {
-    req: &'r FitRequest,
+/// ([`rotor_jerk`]), progress counted and, for a diagnosis or a model with a trim
+/// moment, the slow rotor thrusts filled in ([`SlowThrust`]; chunks then reach the
+/// consumer up to a few seconds of samples later, in order, the last ones at
+/// [`Feed::finish`]).
+struct Feed<'p, C> {
+    derive: DeriveOptions,
+    progress: Option<&'p AtomicU64>,
     jerk: JerkScratch,
+    /// The slow rotor thrusts are wanted; the stage once the first chunk is in.
+    slow_wanted: bool,
     slow: Option<SlowThrust>,
     consume: C,
 }
 
-impl<'r, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'r, C> {
-    fn new(req: &'r FitRequest, consume: C) -> Self {
+impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
+    /// The feed of a fit: the slow thrusts for a diagnosis.
+    fn of_fit(req: &'p FitRequest, consume: C) -> Self {
+        Self::new(jerk_options(req), req.diagnose.is_some(), consume)
+            .counting(req.progress.as_deref())
+    }
+
+    fn new(derive: DeriveOptions, slow_wanted: bool, consume: C) -> Self {
         Self {
-            req,
+            derive,
+            progress: None,
             jerk: JerkScratch::default(),
+            slow_wanted,
             slow: None,
             consume,
         }
     }
 
+    fn counting(self, progress: Option<&'p AtomicU64>) -> Self {
+        Self { progress, ..self }
+    }
+
     fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
-        rotor_jerk(chunk, &jerk_options(self.req), &mut self.jerk);
-        let (req, consume) = (self.req, &mut self.consume);
+        rotor_jerk(chunk, &self.derive, &mut self.jerk);
+        let (progress, consume) = (self.progress, &mut self.consume);
         let mut deliver = |c: &SampleChunk| {
-            count_progress(req, c);
+            if let Some(p) = progress {
+                p.fetch_add(c.len() as u64, Ordering::Relaxed);
+            }
             consume(c)
         };
-        if req.diagnose.is_none() {
+        if !self.slow_wanted {
             return deliver(chunk);
         }
         let rotors = chunk.rotor_count();
@@ -392,15 +411,38 @@ impl<'r, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'r, C> {
     }
 
     fn finish(&mut self) -> Result<(), Error> {
-        let (req, consume) = (self.req, &mut self.consume);
+        let (progress, consume) = (self.progress, &mut self.consume);
         match self.slow.as_mut() {
             Some(stage) => stage.finish(|c| {
-                count_progress(req, &c);
+                if let Some(p) = progress {
+                    p.fetch_add(c.len() as u64, Ordering::Relaxed);
+                }
                 consume(&c)
             }),
             None => Ok(()),
         }
     }
+}
+
+/// Streams the log file at `path` as `model` needs it: read with `mapping`, cut into the
+/// chunks a fit cuts, with the rates of rotor acceleration and the slow rotor thrusts
+/// derived as the fit pipeline derives them (so `predict` and `validate` see the
+/// samples the fit saw), each chunk handed to `consume` in order.
+pub fn stream_for_model(
+    model: &IdentifiedModel,
+    path: &std::path::Path,
+    mapping: Option<&Mapping>,
+    consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
+) -> Result<(), Error> {
+    let read = ReadOptions::default();
+    let derive = mapping.and_then(|m| m.derive).unwrap_or(read.derive);
+    let mut feed = Feed::new(derive, model.structure.needs_slow_thrust(), consume);
+    let mut reader = io::open_log(path, &model.vehicle, mapping, &read)?;
+    reader.join_segments();
+    while let Some(chunk) = reader.next_chunk_mut() {
+        feed.push(chunk?)?;
+    }
+    feed.finish()
 }
 
 /// Differentiator of the rates of rotor acceleration ([`rotor_jerk`], on the re-cut

@@ -421,9 +421,10 @@ fn fold_r2(d: &serde_json::Value, name: &str, part: &str, axis: usize) -> f64 {
 #[test]
 fn real_neurobem_three_logs_are_cross_validated_log_by_log() {
     // Three real flights: every decision is scored by leaving one log out. Measured
-    // (docs/real-data.md): pooled cross-validated R² Fz 0.56 -> 0.95, Mx 0.09 -> 0.51,
-    // My -0.04 -> 0.55, Mz -0.11 -> 0.02 with Fx, Fy unchanged at 0.93-0.95. The bounds
-    // pin that behaviour with a margin of 0.05 for rounding across platforms.
+    // (docs/real-data.md): pooled cross-validated R² Fz 0.56 -> 0.95, Mx 0.09 -> 0.77,
+    // My -0.04 -> 0.70, Mz -0.11 -> 0.16 with Fx, Fy at 0.93-0.95 (the trim moment
+    // carries most of the moments' gain). The bounds pin that behaviour with a margin of
+    // 0.05 for rounding across platforms.
     let v = fit_neurobem("neurobem", &[FIGURE8, MELON, RACETRACK]);
     assert_eq!(v["samples"].as_u64().unwrap(), 14306 + 11431 + 12724);
     let cv = v["cross_validation"].as_array().unwrap();
@@ -431,7 +432,7 @@ fn real_neurobem_three_logs_are_cross_validated_log_by_log() {
     assert_eq!(names, [FIGURE8, MELON, RACETRACK, "pooled"]);
     let d = &v["diagnosis"];
     let pooled = |part: &str, axis: usize| fold_r2(d, "pooled", part, axis);
-    for (axis, at_least) in [(0, 0.9), (1, 0.9), (2, 0.9), (3, 0.43), (4, 0.50)] {
+    for (axis, at_least) in [(0, 0.9), (1, 0.9), (2, 0.9), (3, 0.72), (4, 0.65)] {
         assert!(
             pooled("after", axis) >= at_least,
             "axis {axis}: {}",
@@ -439,7 +440,7 @@ fn real_neurobem_three_logs_are_cross_validated_log_by_log() {
         );
         assert!(pooled("after", axis) >= pooled("before", axis) - 0.01);
     }
-    assert!(pooled("after", 5) > 0.0, "Mz {}", pooled("after", 5));
+    assert!(pooled("after", 5) > 0.11, "Mz {}", pooled("after", 5));
     // Parameters the held-out data do not support are listed, and the final model is
     // smaller than the Eq. 22 model plus the effects added.
     assert!(!d["unsupported"].as_array().unwrap().is_empty());
@@ -449,7 +450,8 @@ fn real_neurobem_three_logs_are_cross_validated_log_by_log() {
 fn real_neurobem_validation_logs_are_for_reporting_only() {
     // Fit two flights and report on a third: decisions are cross-validated on the two
     // fit logs (two folds), and the third is scored only at the end. Measured on the
-    // race track: Fz R² 0.13 -> 0.85 and Mx 0.07 -> 0.33 (bounds 0.7 and 0.2).
+    // race track: Fz R² 0.13 -> 0.85, Mx 0.07 -> 0.77 and My 0.29 -> 0.72 (bounds 0.8,
+    // 0.7 and 0.65).
     let model = tmp("neurobem_rotation_model.toml");
     let model_out = format!("--model-out={}", model.display());
     let v = fit_neurobem(
@@ -477,8 +479,9 @@ fn real_neurobem_validation_logs_are_for_reporting_only() {
         "{} vs {main}",
         val("before", 2)
     );
-    assert!(val("after", 2) >= 0.7, "Fz {}", val("after", 2));
-    assert!(val("after", 3) >= 0.2, "Mx {}", val("after", 3));
+    assert!(val("after", 2) >= 0.8, "Fz {}", val("after", 2));
+    assert!(val("after", 3) >= 0.7, "Mx {}", val("after", 3));
+    assert!(val("after", 4) >= 0.65, "My {}", val("after", 4));
     // The saved model is the final one, terms left out included: `validate` on the
     // race track reproduces the diagnosis' "after" figures (1e-9: the same statistics
     // accumulated in another order).

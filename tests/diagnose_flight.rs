@@ -255,7 +255,10 @@ fn a_slow_moment_the_controller_trims_is_named_and_a_clean_flight_has_none() {
     }
     let clean = diagnose_flight(&[], 60.0, 0.0, 1);
     assert!(
-        clean.effects_added.iter().all(|e| e.kind != EffectKind::TrimMoment),
+        clean
+            .effects_added
+            .iter()
+            .all(|e| e.kind != EffectKind::TrimMoment),
         "{:#?}",
         clean.findings
     );

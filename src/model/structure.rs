@@ -233,6 +233,14 @@ impl ModelStructure {
         self.with_columns(params, columns)
     }
 
+    /// True when a column needs the slow rotor thrusts (a trim-moment term), which only
+    /// a whole log's time series gives.
+    pub fn needs_slow_thrust(&self) -> bool {
+        self.required
+            .iter()
+            .any(|s| matches!(s, Signal::SlowSquaredActuator(..)))
+    }
+
     /// Checks that `chunk` can be assembled with this structure.
     pub fn check_chunk(&self, chunk: &SampleChunk) -> Result<(), ModelError> {
         chunk.check_lengths().map_err(|e| ModelError::ChunkShape {
@@ -251,11 +259,7 @@ impl ModelStructure {
         if self.required.contains(&Signal::DrDDot) && !chunk.has_omega_ddot() {
             return Err(ModelError::MissingRotorAccelerationRate);
         }
-        let slow = self
-            .required
-            .iter()
-            .any(|s| matches!(s, Signal::SlowSquaredActuator(..)));
-        if slow && !chunk.has_omega_squared_slow() {
+        if self.needs_slow_thrust() && !chunk.has_omega_squared_slow() {
             return Err(ModelError::MissingSlowThrust);
         }
         let per_rotor_ground = self
