@@ -105,6 +105,11 @@ pub struct DiagnosisReport {
     pub before: Vec<AxisRow>,
     /// Cross-validated metrics of the final model (all folds pooled).
     pub after: Vec<AxisRow>,
+    /// Cross-validated metrics of the final model without its unspecific terms (freed
+    /// coefficients, generic terms), all folds pooled: what named mechanisms carry.
+    /// Absent when the final model has no unspecific term.
+    #[serde(default)]
+    pub named_only: Option<Vec<AxisRow>>,
     /// Per fold, then pooled: before and after.
     pub folds: Vec<BeforeAfterRow>,
     /// On the reporting-only validation logs, when given: before and after.
@@ -258,6 +263,7 @@ impl From<&Diagnosis> for DiagnosisReport {
                 .collect(),
             before: rows(&d.before),
             after: rows(&d.after),
+            named_only: d.named_only.as_ref().map(rows),
             folds,
             validation: d
                 .validation

@@ -5,7 +5,7 @@
 
 use super::findings::describe;
 use super::outcome::{CandidateScore, Rejection};
-use super::score::{preference, score};
+use super::score::score;
 use super::state::Search;
 use super::trial::{Trial, chi2_quantile};
 use crate::diagnose::candidate::Role;
@@ -24,12 +24,13 @@ pub(super) fn likeliest_in_band(
     if first.rejected.is_some() || first.forms_of.is_none() {
         return None;
     }
-    let bar = (1.0 - look_alike) * preference(first, look_alike);
+    // Forms of one family share their role, so their gains compare as they are.
+    let bar = (1.0 - look_alike) * first.total_gain;
     scored
         .iter()
         .enumerate()
         .filter(|(_, (s, _, _))| {
-            s.rejected.is_none() && s.family() == first.family() && preference(s, look_alike) >= bar
+            s.rejected.is_none() && s.family() == first.family() && s.total_gain >= bar
         })
         .max_by(|a, b| a.1.0.held_out_lr.total_cmp(&b.1.0.held_out_lr))
         .map(|(i, _)| i)

@@ -213,6 +213,10 @@ pub struct Diagnosis {
     pub before: [AxisMetrics; 6],
     /// Cross-validated metrics of the final model, all folds pooled.
     pub after: [AxisMetrics; 6],
+    /// Cross-validated metrics (all folds pooled) of the final model without its
+    /// unspecific terms (freed coefficients, generic terms): what the named mechanisms
+    /// and completions carry. `None` when the final model has no unspecific term.
+    pub named_only: Option<[AxisMetrics; 6]>,
     /// Per fold, the base model's metrics.
     pub before_folds: Vec<[AxisMetrics; 6]>,
     /// Per fold, the final model's metrics.

@@ -8,15 +8,15 @@ use super::trial::{Trial, gains, held_out_lr, joint_p, required_lr, trial};
 use crate::diagnose::local::LocalFolds;
 use crate::estimate::{self, CrossValidation};
 
-/// Validation gain used to rank accepted candidates of one group: a named mechanism's
-/// gain counts `1 + look_alike` times, so it is preferred over an unspecific hypothesis
-/// (a generic term, a freed moment coefficient) that explains about as much, but not
-/// over one that explains clearly more.
-pub(super) fn preference(s: &CandidateScore, look_alike: f64) -> f64 {
+/// Validation gain used to rank accepted candidates of one group: a named hypothesis's
+/// gain counts `1 + margin` times ([`crate::diagnose::DiagnoseOptions::unspecific_margin`]),
+/// so it is preferred over an unspecific one (a generic term, a freed moment coefficient)
+/// unless that explains clearly more.
+pub(super) fn preference(s: &CandidateScore, margin: f64) -> f64 {
     if s.role.is_unspecific() {
         s.total_gain
     } else {
-        s.total_gain * (1.0 + look_alike)
+        s.total_gain * (1.0 + margin)
     }
 }
 

@@ -87,6 +87,7 @@ pub fn diagnose_on_threads(
         options,
         threads,
     );
+    let named_only = named_only(stats, &current, &in_model, fit_options, inflation)?;
     let validation = stats
         .report
         .map(|r| -> Result<_, DiagnoseError> {
@@ -116,6 +117,7 @@ pub fn diagnose_on_threads(
         folds: stats.folds.names.clone(),
         before: base.cv.pooled_metrics(),
         after: current.cv.pooled_metrics(),
+        named_only,
         before_folds: fold_metrics(&base.cv),
         after_folds: fold_metrics(&current.cv),
         validation,
@@ -124,6 +126,32 @@ pub fn diagnose_on_threads(
         structure: current.structure,
         fit,
     })
+}
+
+/// The cross-validated metrics of `current` without the columns of its unspecific
+/// additions (`in_model`), all folds pooled; `None` when it has none.
+fn named_only(
+    stats: &CandidateStatistics,
+    current: &Trial,
+    in_model: &[(usize, CandidateScore, String)],
+    fit_options: &FitOptions,
+    inflation: f64,
+) -> Result<Option<[crate::estimate::AxisMetrics; 6]>, DiagnoseError> {
+    let unspecific: Vec<usize> = in_model
+        .iter()
+        .filter(|(c, _, _)| stats.candidates[*c].role.is_unspecific())
+        .flat_map(|(c, _, _)| stats.candidate_params[*c].iter().copied())
+        .collect();
+    let named: Vec<usize> = current
+        .columns
+        .iter()
+        .copied()
+        .filter(|&j| !unspecific.contains(&stats.extended.columns[j].param))
+        .collect();
+    if named.len() == current.columns.len() {
+        return Ok(None);
+    }
+    Ok(Some(trial(stats, &named, fit_options, inflation)?.cv.pooled_metrics()))
 }
 
 impl Search<'_> {
@@ -171,9 +199,10 @@ impl Search<'_> {
             });
         // Accepted first; among them completions of the Eq. 22 structure before
         // undeclared effects (so an effect is judged against a model that already has
-        // the terms its own assumptions drop), and named effects before generic terms;
-        // then by validation gain.
-        let look_alike = options.look_alike;
+        // the terms its own assumptions drop), and named hypotheses before unspecific
+        // ones unless those explain clearly more (`unspecific_margin`); then by
+        // validation gain.
+        let (look_alike, margin) = (options.look_alike, options.unspecific_margin);
         scored.sort_by(|a, b| {
             let key = |s: &CandidateScore| {
                 let ok = s.rejected.is_none();
@@ -181,7 +210,7 @@ impl Search<'_> {
             };
             key(&a.0)
                 .cmp(&key(&b.0))
-                .then(preference(&a.0, look_alike).total_cmp(&preference(&b.0, look_alike)))
+                .then(preference(&a.0, margin).total_cmp(&preference(&b.0, margin)))
                 .reverse()
         });
         if let Some(i) = likeliest_in_band(&scored, look_alike) {
