@@ -21,6 +21,7 @@ pub mod inference;
 mod lstsq;
 pub mod mmr;
 pub mod ols;
+pub mod remainder;
 
 use serde::Serialize;
 

@@ -44,6 +44,8 @@ pub fn diagnose_on_threads(
         current: base.clone(),
         tried: Vec::new(),
         in_model: Vec::new(),
+        earlier_tests: 0,
+        entry_tests: Vec::new(),
         threads,
     };
     let mut steps = Vec::new();
@@ -53,6 +55,7 @@ pub fn diagnose_on_threads(
             stopped_at_limit = search.tried.len() < stats.candidates.len();
             break;
         }
+        let in_play = search.named_in_play();
         let Some((mut step, winner)) = search.forward_step() else {
             break;
         };
@@ -60,6 +63,8 @@ pub fn diagnose_on_threads(
             steps.push(step);
             break;
         };
+        search.entry_tests.push((c, search.earlier_tests));
+        search.earlier_tests += in_play;
         search.tried.push(c);
         search.kept = t.columns.clone();
         search.current = t;
@@ -289,7 +294,8 @@ impl Search<'_> {
             // Half the entry gain to stay (a stepwise rule's removal threshold below its
             // entry threshold, so a term near the bar does not enter and leave in turn).
             let stay = 0.5 * self.options.min_gain;
-            let (s, _, _) = score(self, &without, e, &reduced, local, self.level(e), stay);
+            let level = self.entry_level(e);
+            let (s, _, _) = score(self, &without, e, &reduced, local, level, stay);
             if let Some(why) = s.rejected {
                 withdrawn.push(format!("{}: {why}", s.name));
                 self.kept = without;
@@ -326,7 +332,7 @@ impl Search<'_> {
         let (best, c, trial) = map_on_threads(&forms, self.threads, |&f| {
             let local = self.local_before(f, reduced);
             let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
-            score(self, without, f, reduced, local, self.level(f), stay)
+            score(self, without, f, reduced, local, self.entry_level(e), stay)
         })
         .into_iter()
         .filter(|(s, _, _)| s.rejected.is_none())
@@ -349,6 +355,8 @@ impl Search<'_> {
         if let Some(slot) = self.in_model.iter_mut().find(|(f, _, _)| *f == e) {
             *slot = entry;
         }
+        let entered = self.entry_tests.iter().find(|(f, _)| *f == e).map(|&(_, t)| t);
+        self.entry_tests.extend(entered.map(|t| (c, t)));
         self.tried.push(c);
         self.kept = trial.columns.clone();
         self.current = trial;

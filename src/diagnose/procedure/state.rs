@@ -22,23 +22,51 @@ pub(super) struct Search<'a> {
     pub(super) tried: Vec<usize>,
     /// Candidates in the current model: index, score when added, the finding.
     pub(super) in_model: Vec<(usize, CandidateScore, String)>,
+    /// Named candidates scored in the steps before the current one (the search-wide
+    /// Bonferroni count, [`Search::level`]).
+    pub(super) earlier_tests: usize,
+    /// For each candidate added: the earlier tests when it entered (its later tests,
+    /// whether it stays or gives way to another form, are at its entry level).
+    pub(super) entry_tests: Vec<(usize, usize)>,
     /// Threads the trial fits of one step share.
     pub(super) threads: usize,
 }
 
 impl Search<'_> {
-    /// Bonferroni level of candidate `c` in a step: named candidates over those still in
-    /// play; generic ones over the whole pool they were screened from.
+    /// Bonferroni level of candidate `c` in the current step: a named one over every
+    /// named candidate scored in the search so far, this step's included (each step
+    /// picks the best of those in play, and an unlimited search makes many steps: the
+    /// noise of the selection grows with every test, so later additions must pay more);
+    /// a generic one over the whole pool it was screened from.
     pub(super) fn level(&self, c: usize) -> f64 {
+        self.level_after(c, self.earlier_tests)
+    }
+
+    /// [`Search::level`] with `earlier` named tests before the current step.
+    pub(super) fn level_after(&self, c: usize, earlier: usize) -> f64 {
+        match self.stats.candidates[c].role {
+            Role::Generic => self.options.alpha / generic::pool_size() as f64,
+            _ => self.options.alpha / (earlier + self.named_in_play()).max(1) as f64,
+        }
+    }
+
+    /// Named candidates not tried yet.
+    pub(super) fn named_in_play(&self) -> usize {
         let stats = self.stats;
-        let named = (0..stats.candidates.len())
+        (0..stats.candidates.len())
             .filter(|c| !self.tried.contains(c))
             .filter(|&c| stats.candidates[c].role != Role::Generic)
-            .count();
-        match stats.candidates[c].role {
-            Role::Generic => self.options.alpha / generic::pool_size() as f64,
-            _ => self.options.alpha / named.max(1) as f64,
-        }
+            .count()
+    }
+
+    /// The level candidate `c`, in the model, entered at.
+    pub(super) fn entry_level(&self, c: usize) -> f64 {
+        let earlier = self
+            .entry_tests
+            .iter()
+            .find(|(e, _)| *e == c)
+            .map_or(self.earlier_tests, |(_, t)| *t);
+        self.level_after(c, earlier)
     }
 
     /// True when the current model holds `max_generic` generic-pool terms.
