@@ -138,6 +138,26 @@ impl SignalConstants {
                     *d *= vh2 / (vh2 + nu0 * nu0);
                 }
             }
+            DownstreamAdvance(i, backward) => {
+                let x = self.hubs[usize::from(i)][0];
+                let sign = if backward == 0 { 1.0 } else { -1.0 };
+                let (u, omega) = (&chunk.velocity[0][..n], &chunk.omega[usize::from(i)][..n]);
+                let r = self.rotor_radius;
+                for ((d, &u), &w) in dst.iter_mut().zip(u).zip(omega) {
+                    let along = sign * u;
+                    *d = if sign * x < 0.0 && along > 0.0 && w > 0.0 {
+                        along / (w * r)
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            Airspeed => {
+                let [u, v, w] = &chunk.velocity;
+                for (k, d) in dst.iter_mut().enumerate() {
+                    *d = (u[k] * u[k] + v[k] * v[k] + w[k] * w[k]).sqrt();
+                }
+            }
             WakeAdvance(i) => {
                 let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
                 let omega = &chunk.omega[usize::from(i)][..n];

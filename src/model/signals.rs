@@ -90,6 +90,14 @@ pub enum Signal {
     /// advance ratio μ_i = V_h/(Ω_i R) instead of the wake strength: a loss that keeps
     /// growing with speed. Dimensionless (0 at Ω_i = 0).
     WakeAdvance(u8),
+    /// Advance ratio of rotor `i` (0-based) when it sits downstream of the CG for one
+    /// direction of flight along the body x axis (second index: 0 forward, 1 backward),
+    /// dimensionless: max(±u, 0)/(Ω_i R) for a rotor behind the CG in forward flight
+    /// (x_i < 0) or ahead of it in backward flight (x_i > 0), 0 otherwise (and at
+    /// Ω_i = 0): the rotors in the others' wake when flying that way, and only then.
+    DownstreamAdvance(u8, u8),
+    /// Airspeed |V| = √(u² + v² + w²), m/s.
+    Airspeed,
     /// Vortex-ring-state onset of rotor `i` (0-based), dimensionless in [0, 1]:
     /// exp(−((w_i/ν0 − 1)/0.5)²) exp(−(V_h/ν0)²), w_i = w + p y_i − q x_i the hub's
     /// descent speed (Eq. 18): a bump centred on descent at the hover inflow speed, the

@@ -118,7 +118,10 @@ mod tests {
             "in-plane force lever arm",
             "rotor-wake interaction",
             "rotor-wake interaction, advance ratio",
+            "rotor-wake interaction, forward flight",
+            "rotor-wake interaction, backward flight",
             "quadratic airframe drag",
+            "quadratic airframe drag, along the airflow",
             "vortex-ring state",
             "terms linear in Vh",
             "rotor-speed delay",
@@ -143,17 +146,21 @@ mod tests {
     /// `*scale*` and `*loss*`, a freed coefficient for `name@axis`).
     #[test]
     fn parameters_carry_their_range_and_reading() {
-        let ranges: [(&str, f64, f64); 15] = [
+        let ranges: [(&str, f64, f64); 17] = [
             ("thrust_scale_", -0.6, 0.6),
             ("in_plane_scale_", -0.6, 0.6),
             ("torque_scale_", -0.6, 0.6),
             ("cg_d", -0.2, 0.2),
             ("ground_effect_scale", 0.0, 3.0),
             ("wake_thrust_loss_advance", 0.0, 5.0),
+            // Added with the directional wake forms (never in the old table).
+            ("wake_thrust_loss_forward", 0.0, 5.0),
+            ("wake_thrust_loss_backward", 0.0, 5.0),
             ("wake_thrust_loss", 0.0, 1.0),
             ("vortex_ring_thrust_loss", 0.0, 0.6),
             ("drag_area_", 0.0, 2.0),
-            ("rotor_speed_delay", -0.05, 0.2),
+            // Narrowed with the closed-loop guard (was −0.05..0.2).
+            ("rotor_speed_delay", -0.05, 0.05),
             ("wind_", -30.0, 30.0),
             ("accel_bias_", -2.0, 2.0),
             // Added with the trim moment (never in the old table).
@@ -181,9 +188,9 @@ mod tests {
                 assert_eq!(p.reading, reading, "{}", p.name);
             }
         }
-        // 4 rotors × 3 scales, 3 CG, 2 ground, 2 wake, vortex ring, 3 drag, delay, 3 wind,
-        // 2 bias, 3 bands × 3 trim fractions.
-        assert_eq!(ranged, 38);
+        // 4 rotors × 3 scales, 3 CG, 2 ground, 4 wake, vortex ring, 2 × 3 drag, delay,
+        // 3 wind, 2 bias, 3 bands × 3 trim fractions.
+        assert_eq!(ranged, 43);
         let freed = library
             .iter()
             .filter(|c| c.kind == EffectKind::DecoupledMoments)

@@ -62,8 +62,14 @@ pub(super) fn delay(ctx: &CandidateContext) -> Vec<Candidate> {
         .into_iter()
         .filter(|c| !c.terms.is_empty())
         .collect();
-    // Plausible from −50 ms to 200 ms.
-    let tau = CandidateParameter::new("rotor_speed_delay", "s", columns).within(-0.05, 0.2);
+    // Plausible within ±50 ms. Positive: the logged speed lags the true one (ESC
+    // telemetry latency and filtering: milliseconds to a few tens of them). Negative:
+    // the loads lag the rotors (the induced flow building up). Beyond 50 ms a "delay"
+    // is no sensor: loads would follow rotor speeds logged that much later, which the
+    // attitude controller makes from the loads' own motion (it drives the rotors from
+    // the measured rates), so the form would predict through the feedback loop, not
+    // through physics.
+    let tau = CandidateParameter::new("rotor_speed_delay", "s", columns).within(-0.05, 0.05);
     vec![
         Candidate::new(
             Kind::RotorSpeedDelay,

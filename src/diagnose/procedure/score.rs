@@ -22,7 +22,9 @@ pub(super) fn preference(s: &CandidateScore, margin: f64) -> f64 {
 
 /// Scores candidate `c` added to the model with columns `kept` (`current`); `local`: the
 /// held-out statistics where it acts with `current`'s cross-validation there; it must
-/// gain `min_gain` (relative NRMSE) to be accepted.
+/// gain `min_gain` (relative NRMSE) to be accepted, an unspecific hypothesis
+/// `1 + unspecific_margin` times as much (it must pay clearly more than a named one
+/// would, against nothing as against a named rival: [`preference`]).
 pub(super) fn score(
     search: &Search,
     kept: &[usize],
@@ -34,6 +36,11 @@ pub(super) fn score(
 ) -> (CandidateScore, usize, Option<Trial>) {
     let (stats, options) = (search.stats, search.options);
     let cand = &stats.candidates[c];
+    let min_gain = if cand.role.is_unspecific() {
+        min_gain * (1.0 + options.unspecific_margin)
+    } else {
+        min_gain
+    };
     let own_params = &stats.candidate_params[c];
     let mut columns = kept.to_vec();
     columns.extend(stats.columns_of(|p| own_params.contains(&p)));
