@@ -4,10 +4,11 @@
 //! the nominal rotor model), with multisine excitation on the commanded moments and
 //! thrust, logged with IMU-like noise.
 //!
-//! The flight starts low (hubs 0.4–2 rotor diameters above the ground for the
-//! first [`FlightConfig::low_seconds`]), then climbs to 2–8 m and flies random velocity
-//! steps up to 12 m/s in every direction with random yaw rates. Set points, excitation
-//! and sensor noise depend on the seed only.
+//! The flight starts low (altitude set points put the hubs 0.8–2 rotor diameters above
+//! the ground for the first [`FlightConfig::low_seconds`], flown gently), then climbs
+//! to 2–8 m and flies random velocity steps up to 12 m/s in every direction with random
+//! yaw rates. Set points, excitation and sensor noise depend on the seed only. There is
+//! no ground contact model: a flight whose CG comes within 2 cm of the ground panics.
 
 use mrsysid::Sample;
 use nalgebra::{DMatrix, Matrix3, UnitQuaternion, Vector3};
@@ -75,6 +76,8 @@ struct SetPoint {
     velocity_ne: [f64; 2],
     altitude: f64,
     yaw_rate: f64,
+    /// Largest horizontal acceleration commanded, m/s² (the tilt limit).
+    max_accel: f64,
 }
 
 /// Set points drawn for the whole flight.
@@ -83,18 +86,25 @@ fn schedule(cfg: &FlightConfig, rng: &mut StdRng) -> Vec<SetPoint> {
     let mut t = 0.0;
     while t < cfg.duration {
         let low = t < cfg.low_seconds;
-        let (speed, hold) = if low { (3.0, 2.0) } else { (12.0, 3.0) };
+        // Near the ground: gentle (2 m/s, tilt under 12°, so no hub comes within
+        // 3 cm of the ground); higher up: up to 12 m/s and 27°.
+        let (speed, hold, max_accel) = if low {
+            (2.0, 2.0, 2.0)
+        } else {
+            (12.0, 3.0, 5.0)
+        };
         let heading = rng.random_range(0.0..std::f64::consts::TAU);
         let v = speed * rng.random::<f64>().sqrt();
         out.push(SetPoint {
             start: t,
             velocity_ne: [v * heading.cos(), v * heading.sin()],
             altitude: if low {
-                rng.random_range(0.03..0.25)
+                rng.random_range(0.08..0.25)
             } else {
                 rng.random_range(2.0..8.0)
             },
             yaw_rate: rng.random_range(-1.5..1.5),
+            max_accel,
         });
         t += hold * rng.random_range(0.6..1.4);
     }
@@ -192,8 +202,8 @@ impl Controller {
         let mut horizontal =
             1.5 * (self.velocity_sp - Vector3::new(s.velocity.x, s.velocity.y, 0.0));
         let h = horizontal.norm();
-        if h > 5.0 {
-            horizontal *= 5.0 / h;
+        if h > sp.max_accel {
+            horizontal *= sp.max_accel / h;
         }
         let accel = Vector3::new(horizontal.x, horizontal.y, -climb_accel);
         let force = air.mass * (accel - Vector3::new(0.0, 0.0, GRAVITY));
@@ -272,6 +282,10 @@ pub fn fly(air: &Airframe, cfg: &FlightConfig, seed: u64) -> Vec<Sample> {
             .collect();
         let body_velocity = s.attitude.inverse() * s.velocity;
         let height = -s.position.z;
+        assert!(
+            height > 0.02,
+            "seed {seed}: the flight touched the ground at {t} s"
+        );
         let wrench = air.wrench(&LoadState {
             velocity: body_velocity,
             rates: s.rates,
