@@ -86,8 +86,8 @@ fn schedule(cfg: &FlightConfig, rng: &mut StdRng) -> Vec<SetPoint> {
     let mut t = 0.0;
     while t < cfg.duration {
         let low = t < cfg.low_seconds;
-        // Near the ground: gentle (2 m/s, tilt under 12°, so no hub comes within
-        // 3 cm of the ground); higher up: up to 12 m/s and 27°.
+        // Near the ground: gentle (2 m/s, tilt under 12°: a hub dips at most 2.7 cm
+        // below the CG); higher up: up to 12 m/s and 27°.
         let (speed, hold, max_accel) = if low {
             (2.0, 2.0, 2.0)
         } else {
