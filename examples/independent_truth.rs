@@ -1,0 +1,151 @@
+//! The diagnosis on an independent simulator (`tests/independent/`): each of five
+//! hidden effects in a response-surface set and in a noisy closed-loop flight, and the
+//! two clean sets, diagnosed at `SEEDS` seeds through the public library with default
+//! options. Prints per case and seed whether the effect was named and what else was
+//! added, then the table: named k of SEEDS, and the terms added beyond the effect and
+//! beyond what the clean set of the same seed gets.
+//!
+//! ```text
+//! cargo run --release --example independent_truth [-- SEEDS [CASE-FILTER]]
+//! cargo run --release --example independent_truth -- 10 'flight, CG'
+//! ```
+
+#[path = "../tests/independent/mod.rs"]
+mod independent;
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use independent::score::{
+    Case, DataKind, Naming, Score, cases, data, diagnose, effect_size, expected_kind, score,
+    vehicle,
+};
+use mrsysid::diagnose::Diagnosis;
+
+/// First seed; seed k of a run is `FIRST_SEED + k`.
+const FIRST_SEED: u64 = 42_000;
+
+/// One case's results over the seeds.
+#[derive(Default)]
+struct Tally {
+    added: usize,
+    look_alike: usize,
+    most_beyond_effect: usize,
+    most_beyond_clean: usize,
+    total_beyond_clean: usize,
+    seeds: usize,
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let seeds: u64 = args.next().map_or(10, |s| s.parse().expect("seed count"));
+    let filter = args.next().unwrap_or_default();
+    let v = vehicle();
+    let all = cases();
+    let wanted: Vec<&Case> = all.iter().filter(|c| c.label().contains(&filter)).collect();
+    let mut tallies: HashMap<String, Tally> = HashMap::new();
+    for k in 0..seeds {
+        let seed = FIRST_SEED + k;
+        let mut clean: HashMap<&str, Diagnosis> = HashMap::new();
+        for kind in [DataKind::Surface, DataKind::Flight] {
+            if wanted.iter().any(|c| c.data == kind) {
+                let case = Case {
+                    data: kind,
+                    hidden: None,
+                };
+                clean.insert(kind.label(), run(&v, &case, seed));
+            }
+        }
+        for case in &wanted {
+            let clean_d = &clean[case.data.label()];
+            let d = if case.hidden.is_none() {
+                clean_d.clone()
+            } else {
+                run(&v, case, seed)
+            };
+            let s = score(&d, clean_d, case.hidden.as_ref().map(expected_kind));
+            report(case, seed, &d, &s);
+            let t = tallies.entry(case.label()).or_default();
+            t.seeds += 1;
+            match s.naming {
+                Naming::Added(_) => t.added += 1,
+                Naming::LookAlike(_) => t.look_alike += 1,
+                Naming::Missed => {}
+            }
+            t.most_beyond_effect = t.most_beyond_effect.max(s.beyond_effect.len());
+            t.most_beyond_clean = t.most_beyond_clean.max(s.beyond_clean.len());
+            t.total_beyond_clean += s.beyond_clean.len();
+        }
+    }
+    println!(
+        "\n| case | named (added + look-alike) | most terms beyond the effect | most beyond the clean set | sum beyond the clean set |"
+    );
+    println!("| --- | --- | --- | --- | --- |");
+    for case in &wanted {
+        let t = &tallies[&case.label()];
+        let named = if case.hidden.is_some() {
+            format!(
+                "{} of {} ({} + {})",
+                t.added + t.look_alike,
+                t.seeds,
+                t.added,
+                t.look_alike
+            )
+        } else {
+            "—".into()
+        };
+        println!(
+            "| {} | {named} | {} | {} | {} |",
+            case.label(),
+            t.most_beyond_effect,
+            t.most_beyond_clean,
+            t.total_beyond_clean
+        );
+    }
+}
+
+/// The data of `case` at `seed`, diagnosed, with the time it took (and, for an effect,
+/// its size in the data).
+fn run(v: &mrsysid::Vehicle, case: &Case, seed: u64) -> Diagnosis {
+    let start = Instant::now();
+    let samples = data(v, case, seed);
+    if case.hidden.is_some() {
+        let size = effect_size(v, case, &samples).map(|x| format!("{x:.3}"));
+        println!("{} | seed {seed}: effect RMS Fx..Mz {size:?}", case.label());
+    }
+    let d = diagnose(v, &case.label(), samples);
+    eprintln!(
+        "  {} seed {seed}: {:.1} s",
+        case.label(),
+        start.elapsed().as_secs_f64()
+    );
+    d
+}
+
+fn report(case: &Case, seed: u64, d: &Diagnosis, s: &Score) {
+    let naming = match (&s.naming, case.hidden) {
+        (_, None) => "clean".to_string(),
+        (Naming::Added(n), _) => format!("NAMED ({n})"),
+        (Naming::LookAlike(n), _) => format!("LOOK-ALIKE ({n})"),
+        (Naming::Missed, _) => "MISSED".to_string(),
+    };
+    println!(
+        "{} | seed {seed}: {naming}; {} beyond the effect, {} beyond the clean set {:?}",
+        case.label(),
+        s.beyond_effect.len(),
+        s.beyond_clean.len(),
+        s.beyond_clean
+    );
+    println!("    added: {:?}", s.added);
+    println!("    findings: {:?}", d.findings);
+    let rmse = |m: &[mrsysid::estimate::AxisMetrics; 6]| m.map(|a| format!("{:.3}", a.rmse));
+    println!(
+        "    held-out RMSE Fx..Mz: Eq. 22 {:?}, final {:?}",
+        rmse(&d.before),
+        rmse(&d.after)
+    );
+    if !d.unsupported.is_empty() {
+        let left: Vec<&str> = d.unsupported.iter().map(|u| u.name.as_str()).collect();
+        println!("    left out: {left:?}");
+    }
+}

@@ -1,0 +1,202 @@
+//! The diagnosis on an independent simulator (`tests/independent/`: its own rotor
+//! formula, airframe, controller, sensors and hidden-effect forms; the crate's truth
+//! simulator is not used), at one seed: the effects it names today, and the known gaps
+//! pinned as what it does instead. The whole table over many seeds:
+//! `cargo run --release --example independent_truth -- 10`.
+
+mod independent;
+
+use independent::effects::Hidden;
+use independent::physics::{Airframe, GRAVITY, LoadState};
+use independent::score::{
+    Case, DataKind, Naming, Score, data, diagnose, effect_size, expected_kind, score, vehicle,
+};
+use independent::surface::FORCE_NOISE;
+use mrsysid::diagnose::Diagnosis;
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// The seed of the harness's first row.
+const SEED: u64 = 42_000;
+
+/// The hidden effect of `Hidden::all()` whose label starts with `label`.
+fn hidden(label: &str) -> Hidden {
+    Hidden::all()
+        .into_iter()
+        .find(|h| h.label().starts_with(label))
+        .expect("a hidden effect")
+}
+
+fn run(data_kind: DataKind, effect: Option<Hidden>) -> Diagnosis {
+    let v = vehicle();
+    let case = Case {
+        data: data_kind,
+        hidden: effect,
+    };
+    let d = diagnose(&v, &case.label(), data(&v, &case, SEED));
+    println!("{}: {:?}", case.label(), d.findings);
+    d
+}
+
+fn scored(data_kind: DataKind, label: &str, clean: &Diagnosis) -> (Diagnosis, Score) {
+    let h = hidden(label);
+    let d = run(data_kind, Some(h));
+    let s = score(&d, clean, Some(expected_kind(&h)));
+    (d, s)
+}
+
+/// Loads of the independent model itself: the rotors carry the weight at its hover
+/// speed with no moment, the rear-rotor wake acts in forward flight only and on the rear
+/// rotors only, and the ground effect is the stated exponential.
+#[test]
+fn the_independent_model_hovers_and_its_effects_act_where_stated() {
+    let v = vehicle();
+    let clean = Airframe::new(&v, None);
+    let hover = clean.hover_omega();
+    let omega = [hover; 4];
+    let state = |u: f64, height: f64| LoadState {
+        velocity: Vector3::new(u, 0.0, 0.0),
+        rates: Vector3::zeros(),
+        omega: &omega,
+        omega_dot: &[0.0; 4],
+        height,
+        attitude: UnitQuaternion::identity(),
+    };
+    let w = clean.wrench(&state(0.0, 100.0));
+    // Round-off only: the sum of four equal thrusts against m g.
+    assert!((w[2] + clean.mass * GRAVITY).abs() < 1e-12, "{w:?}");
+    for j in [0, 1, 3, 4, 5] {
+        assert!(w[j].abs() < 1e-12, "axis {j}: {w:?}");
+    }
+    let wake = Airframe::new(&v, Some(hidden("rear-rotor wake")));
+    // Backwards: exactly the clean loads. Forwards at 8 m/s: the rear rotors (2 and 3)
+    // lose loss·μ_f of their thrust, so F_z rises by that and the nose pitches up by
+    // that times the arm x = 0.159 m.
+    assert_eq!(
+        wake.wrench(&state(-8.0, 100.0)),
+        clean.wrench(&state(-8.0, 100.0))
+    );
+    let (a, b) = (
+        wake.wrench(&state(8.0, 100.0)),
+        clean.wrench(&state(8.0, 100.0)),
+    );
+    let rear_thrust: f64 = [1, 2]
+        .iter()
+        .map(|&i| {
+            let alone = Airframe {
+                hubs: vec![clean.hubs[i]],
+                nominal_hubs: vec![clean.nominal_hubs[i]],
+                spins: vec![clean.spins[i]],
+                ..clean.clone()
+            };
+            let one = [hover];
+            -alone.wrench(&LoadState {
+                omega: &one,
+                omega_dot: &[0.0],
+                ..state(8.0, 100.0)
+            })[2]
+        })
+        .sum();
+    let mu = 8.0 / (hover * clean.radius);
+    let lost = mu * rear_thrust; // loss = 1
+    assert!((a[2] - b[2] - lost).abs() < 1e-9 * lost, "{a:?} {b:?}");
+    assert!(
+        (a[4] - b[4] - 0.159 * lost).abs() < 1e-9 * lost,
+        "{a:?} {b:?}"
+    );
+    assert!((a[3] - b[3]).abs() < 1e-12);
+    // Ground effect with the hubs half a diameter up: thrust × (1 + 0.3 e⁻¹).
+    let ground = Airframe::new(&v, Some(hidden("ground effect")));
+    let diameter = 2.0 * clean.radius;
+    let low = 0.5 * diameter - v.props.hub_height;
+    let ratio = ground.wrench(&state(0.0, low))[2] / clean.wrench(&state(0.0, low))[2];
+    assert!(
+        (ratio - (1.0 + 0.3 * (-1.0f64).exp())).abs() < 1e-12,
+        "{ratio}"
+    );
+}
+
+/// The response-surface set (3000 points with balance noise) at one seed.
+///
+/// Named today at 10 of 10 seeds (42000–42009): a CG offset and a weak rotor (rotor 2
+/// at 90 % thrust) with no term beyond what the clean set of the same seed gets, the
+/// exponential ground effect with at most one. One term beyond the clean set is
+/// allowed for each: the search rules are being revised, and a term more is not what
+/// this test guards.
+///
+/// Known gaps, pinned as what the diagnosis does instead (flip them when fixed):
+/// - the rear-rotor wake in forward flight only is not named; its F_z shape lands in a
+///   generic `Fz u*dt` term, with further terms beyond the clean set;
+/// - the quadratic airframe drag (|V|-weighted, with a vertical area) is not named, and
+///   its F_z is left in the residual: held-out F_z RMSE ~0.49 N against ~0.03 N on the
+///   clean set.
+#[test]
+fn surface_set_names_cg_offset_weak_rotor_and_ground_effect_and_pins_the_gaps() {
+    let clean = run(DataKind::Surface, None);
+    for label in ["CG offset", "weak rotor", "ground effect"] {
+        let (_, s) = scored(DataKind::Surface, label, &clean);
+        assert!(
+            matches!(s.naming, Naming::Added(_)),
+            "{label}: {:?}",
+            s.added
+        );
+        assert!(s.beyond_clean.len() <= 1, "{label}: {:?}", s.beyond_clean);
+        if label == "weak rotor" {
+            assert_eq!(s.naming, Naming::Added("weak rotor 2".into()));
+        }
+    }
+    // Known gap: the wake.
+    let (_, s) = scored(DataKind::Surface, "rear-rotor wake", &clean);
+    assert_eq!(
+        s.naming,
+        Naming::Missed,
+        "the wake is named now: {:?}",
+        s.added
+    );
+    assert!(
+        s.added.iter().any(|n| n == "generic Fz u*dt"),
+        "{:?}",
+        s.added
+    );
+    assert!(s.beyond_clean.len() >= 2, "{:?}", s.beyond_clean);
+    // Known gap: the drag, there to see (F_z RMS ~0.6 N against 0.03 N of balance
+    // noise), and the F_z it leaves.
+    let drag = hidden("quadratic airframe drag");
+    let v = vehicle();
+    let case = Case {
+        data: DataKind::Surface,
+        hidden: Some(drag),
+    };
+    let size = effect_size(&v, &case, &data(&v, &case, SEED));
+    assert!(size[2] > 10.0 * FORCE_NOISE, "{size:?}");
+    let (d, s) = scored(DataKind::Surface, "quadratic airframe drag", &clean);
+    assert_eq!(
+        s.naming,
+        Naming::Missed,
+        "the drag is named now: {:?}",
+        s.added
+    );
+    let fz = |d: &Diagnosis| d.after[2].rmse;
+    assert!(
+        fz(&d) > 5.0 * fz(&clean),
+        "F_z RMSE {} against clean {}",
+        fz(&d),
+        fz(&clean)
+    );
+}
+
+/// The noisy closed-loop flight (60 s at 200 Hz) at one seed: a CG offset and a weak
+/// rotor are named with nothing beyond what the clean flight gets (10 of 10 seeds, 0
+/// terms beyond the clean flight, measured; one allowed as above).
+#[test]
+fn flight_names_cg_offset_and_weak_rotor() {
+    let clean = run(DataKind::Flight, None);
+    for label in ["CG offset", "weak rotor"] {
+        let (_, s) = scored(DataKind::Flight, label, &clean);
+        assert!(
+            matches!(s.naming, Naming::Added(_)),
+            "{label}: {:?}",
+            s.added
+        );
+        assert!(s.beyond_clean.len() <= 1, "{label}: {:?}", s.beyond_clean);
+    }
+}
