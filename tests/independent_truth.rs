@@ -1,7 +1,7 @@
 //! The diagnosis on an independent simulator (`tests/independent/`: its own rotor
 //! formula, airframe, controller, sensors and hidden-effect forms; the crate's truth
-//! simulator is not used), at one seed: the effects it names today, and the known gaps
-//! pinned as what it does instead. The whole table over many seeds:
+//! simulator is not used), at one seed: every hidden effect named, and what it leaves.
+//! The whole table over many seeds:
 //! `cargo run --release --example independent_truth -- 10`.
 
 mod independent;
@@ -117,71 +117,70 @@ fn the_independent_model_hovers_and_its_effects_act_where_stated() {
 
 /// The response-surface set (3000 points with balance noise) at one seed.
 ///
-/// Named today at 10 of 10 seeds (42000–42009): a CG offset and a weak rotor (rotor 2
-/// at 90 % thrust) with no term beyond what the clean set of the same seed gets, the
-/// exponential ground effect with at most one. One term beyond the clean set is
-/// allowed for each: the search rules are being revised, and a term more is not what
-/// this test guards.
-///
-/// Known gaps, pinned as what the diagnosis does instead (flip them when fixed):
-/// - the rear-rotor wake in forward flight only is not named; its F_z shape lands in a
-///   generic `Fz u*dt` term, with further terms beyond the clean set;
-/// - the quadratic airframe drag (|V|-weighted, with a vertical area) is not named, and
-///   its F_z is left in the residual: held-out F_z RMSE ~0.49 N against ~0.03 N on the
-///   clean set.
+/// Named at 10 of 10 seeds (42000–42009) on the response-surface set: a CG offset and a
+/// weak rotor (rotor 2 at 90 % thrust) with no term beyond what the clean set of the
+/// same seed gets, the exponential ground effect and the rear-rotor wake in forward
+/// flight only (as the wake family's forward-flight form) with none beyond it either, the
+/// |V|-weighted quadratic drag acting above the CG (as the drag's along-the-airflow form)
+/// with at most two (its moment goes to the in-plane force lever arm and a freed H-force
+/// coefficient). One term more than measured is allowed for each: a term more is not
+/// what this test guards; naming the effect, and the held-out F_z the drag leaves, are.
 #[test]
-fn surface_set_names_cg_offset_weak_rotor_and_ground_effect_and_pins_the_gaps() {
+fn surface_set_names_every_hidden_effect() {
     let clean = run(DataKind::Surface, None);
-    for label in ["CG offset", "weak rotor", "ground effect"] {
-        let (_, s) = scored(DataKind::Surface, label, &clean);
+    // (label, the finding's name, most terms beyond the clean set, most held-out F_z
+    // RMSE over the clean set's: 1.5 where the named form fits the effect's F_z; the
+    // product's ground effect is Cheeseman–Bennett, which leaves part of this
+    // exponential one, 0.069 N against 0.031 N clean, measured).
+    for (label, named_as, beyond, fz_ratio) in [
+        ("CG offset", None, 1, 1.5),
+        ("weak rotor", Some("weak rotor 2"), 1, 1.5),
+        ("ground effect", None, 1, 2.5),
+        (
+            "rear-rotor wake",
+            Some("rotor-wake interaction, forward flight"),
+            1,
+            1.5,
+        ),
+        (
+            "quadratic airframe drag",
+            Some("quadratic airframe drag, along the airflow"),
+            3,
+            1.5,
+        ),
+    ] {
+        let (d, s) = scored(DataKind::Surface, label, &clean);
         assert!(
             matches!(s.naming, Naming::Added(_)),
             "{label}: {:?}",
             s.added
         );
-        assert!(s.beyond_clean.len() <= 1, "{label}: {:?}", s.beyond_clean);
-        if label == "weak rotor" {
-            assert_eq!(s.naming, Naming::Added("weak rotor 2".into()));
+        if let Some(name) = named_as {
+            assert_eq!(s.naming, Naming::Added(name.into()), "{label}");
         }
+        assert!(
+            s.beyond_clean.len() <= beyond,
+            "{label}: {:?}",
+            s.beyond_clean
+        );
+        // The effect's F_z is explained (the drag's F_z is ~0.6 N RMS against 0.03 N of
+        // balance noise).
+        let fz = |d: &Diagnosis| d.after[2].rmse;
+        assert!(
+            fz(&d) < fz_ratio * fz(&clean),
+            "{label}: F_z RMSE {} against clean {}",
+            fz(&d),
+            fz(&clean)
+        );
     }
-    // Known gap: the wake.
-    let (_, s) = scored(DataKind::Surface, "rear-rotor wake", &clean);
-    assert_eq!(
-        s.naming,
-        Naming::Missed,
-        "the wake is named now: {:?}",
-        s.added
-    );
-    assert!(
-        s.added.iter().any(|n| n == "generic Fz u*dt"),
-        "{:?}",
-        s.added
-    );
-    assert!(s.beyond_clean.len() >= 2, "{:?}", s.beyond_clean);
-    // Known gap: the drag, there to see (F_z RMS ~0.6 N against 0.03 N of balance
-    // noise), and the F_z it leaves.
-    let drag = hidden("quadratic airframe drag");
+    // The drag is there to see.
     let v = vehicle();
     let case = Case {
         data: DataKind::Surface,
-        hidden: Some(drag),
+        hidden: Some(hidden("quadratic airframe drag")),
     };
     let size = effect_size(&v, &case, &data(&v, &case, SEED));
     assert!(size[2] > 10.0 * FORCE_NOISE, "{size:?}");
-    let (d, s) = scored(DataKind::Surface, "quadratic airframe drag", &clean);
-    assert_eq!(
-        s.naming,
-        Naming::Missed,
-        "the drag is named now: {:?}",
-        s.added
-    );
-    let fz = |d: &Diagnosis| d.after[2].rmse;
-    assert!(
-        fz(&d) > 5.0 * fz(&clean),
-        "F_z RMSE {} against clean {}",
-        fz(&d),
-        fz(&clean)
-    );
 }
 
 /// The noisy closed-loop flight (60 s at 200 Hz) at one seed: a CG offset and a weak

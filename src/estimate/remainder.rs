@@ -126,7 +126,12 @@ impl Remainder {
             self.history.clear();
         }
         let row = Row { e, x };
-        let longest = self.lags.iter().map(|l| l.unsigned_abs()).max().unwrap_or(0);
+        let longest = self
+            .lags
+            .iter()
+            .map(|l| l.unsigned_abs())
+            .max()
+            .unwrap_or(0);
         let n = self.history.len();
         let lag_count = REMAINDER_LAGS_MS.len();
         for (k, &lag) in self.lags.iter().enumerate() {
@@ -300,7 +305,11 @@ mod tests {
         // A constant reference and a zero residual correlate with nothing.
         assert!(ev[1].references[1].correlation.iter().all(|&c| c == 0.0));
         assert!(ev[0].references[0].correlation.iter().all(|&c| c == 0.0));
-        assert!(ev[1].sentence().contains("20 ms later"), "{}", ev[1].sentence());
+        assert!(
+            ev[1].sentence().contains("20 ms later"),
+            "{}",
+            ev[1].sentence()
+        );
     }
 
     #[test]
@@ -316,7 +325,11 @@ mod tests {
         }
         for k in 0..500 {
             let v = (k as f64 * 0.3).sin();
-            a.push(15.0 + k as f64 * dt, [v, 0.0, 0.0], [[v, 0.0], [0.0; 2], [0.0; 2]]);
+            a.push(
+                15.0 + k as f64 * dt,
+                [v, 0.0, 0.0],
+                [[v, 0.0], [0.0; 2], [0.0; 2]],
+            );
         }
         let zero = a.evidence()[0].references[0].correlation[5];
         assert!((zero - 1.0).abs() < 1e-12, "{zero}");

@@ -41,7 +41,10 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
         .form_of(Kind::WakeInteraction)
         // A tenth of a rotor's thrust or more at θ = 1, summed over rotors.
         .acting_where(Activity {
-            terms: rotors.iter().map(|&i| term(1.0, &[signal(i as u8)])).collect(),
+            terms: rotors
+                .iter()
+                .map(|&i| term(1.0, &[signal(i as u8)]))
+                .collect(),
             threshold: 0.1,
         })
     };

@@ -156,7 +156,11 @@ fn named_only(
     if named.len() == current.columns.len() {
         return Ok(None);
     }
-    Ok(Some(trial(stats, &named, fit_options, inflation)?.cv.pooled_metrics()))
+    Ok(Some(
+        trial(stats, &named, fit_options, inflation)?
+            .cv
+            .pooled_metrics(),
+    ))
 }
 
 impl Search<'_> {
@@ -355,7 +359,11 @@ impl Search<'_> {
         if let Some(slot) = self.in_model.iter_mut().find(|(f, _, _)| *f == e) {
             *slot = entry;
         }
-        let entered = self.entry_tests.iter().find(|(f, _)| *f == e).map(|&(_, t)| t);
+        let entered = self
+            .entry_tests
+            .iter()
+            .find(|(f, _)| *f == e)
+            .map(|&(_, t)| t);
         self.entry_tests.extend(entered.map(|t| (c, t)));
         self.tried.push(c);
         self.kept = trial.columns.clone();
