@@ -13,7 +13,6 @@
 //! 20 % of the data in 2 s segments by default. Rows of a time series are never
 //! sampled at random.
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::diagnose::local::{ActivityParts, LocalFolds, LocalRegions};
@@ -24,8 +23,8 @@ use crate::diagnose::{
 };
 use crate::error::{Error, RequestError};
 use crate::estimate::{
-    self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, FitOptions, Folds,
-    ResidualDiagnostics, ResidualPass,
+    self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, Folds, ResidualDiagnostics,
+    ResidualPass,
 };
 use crate::identified::IdentifiedModel;
 use crate::io::derive::{JerkScratch, rotor_jerk};
@@ -36,66 +35,14 @@ use crate::slow::SlowThrust;
 use crate::source::LogSource;
 use crate::spill::{Spill, SpillWriter};
 use crate::stats::{AccumulateError, Accumulator, stored_columns_of};
-use crate::vehicle::Vehicle;
 
+mod request;
 mod threads;
 
+pub use request::{FitRequest, Holdout};
+
+use request::{check, no_holdout};
 use threads::{run_in_order, run_jobs, segments};
-
-/// Time-segment hold-out of the fit logs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Holdout {
-    /// Segment length, s.
-    pub segment_seconds: f64,
-    /// Every `every`-th segment is held out (fraction 1/every).
-    pub every: usize,
-}
-
-impl Default for Holdout {
-    fn default() -> Self {
-        Self {
-            segment_seconds: 2.0,
-            every: 5,
-        }
-    }
-}
-
-impl Holdout {
-    /// True when the sample at `t` (s), in a log starting at `t0` (s), is held out.
-    pub fn holds_out(&self, t: f64, t0: f64) -> bool {
-        let segment = ((t - t0) / self.segment_seconds).floor() as usize;
-        self.every > 0 && segment % self.every == self.every - 1
-    }
-}
-
-/// Everything `fit` needs.
-#[derive(Debug, Clone)]
-pub struct FitRequest {
-    /// Logs to fit.
-    pub logs: Vec<LogSource>,
-    /// The vehicle.
-    pub vehicle: Vehicle,
-    /// Mapping for logs that do not follow the contract.
-    pub mapping: Option<Mapping>,
-    /// Reader options.
-    pub read: ReadOptions,
-    /// Eq. 22 structure.
-    pub structure: ModelStructure,
-    /// Estimation options.
-    pub fit: FitOptions,
-    /// Segment hold-out of a single fit log (cross-validation of one log).
-    pub holdout: Holdout,
-    /// Reporting-only validation logs: evaluated, never used for a decision.
-    pub validate: Vec<LogSource>,
-    /// Threads for reading, accumulating and the diagnosis (≥ 1).
-    pub threads: usize,
-    /// Run the second pass (residual diagnostics, plot series).
-    pub second_pass: bool,
-    /// Run the closing-the-loop diagnosis (in the second pass).
-    pub diagnose: Option<DiagnoseOptions>,
-    /// Samples read so far, over both passes, for a progress display.
-    pub progress: Option<Arc<AtomicU64>>,
-}
 
 /// Decimated measured/predicted series for plots, per axis.
 #[derive(Debug, Clone, Default)]
@@ -684,60 +631,6 @@ fn arrange(req: &FitRequest, parts: &[[&Accumulator; 2]]) -> Result<(Folds, Accu
         merge(&mut fit, a)?;
     }
     Ok((folds, fit))
-}
-
-/// Refuses a request that cannot be carried out, before any log is read.
-fn check(req: &FitRequest) -> Result<(), RequestError> {
-    if req.logs.is_empty() {
-        return Err(RequestError::NoLogs);
-    }
-    let h = req.holdout;
-    if !(h.segment_seconds.is_finite() && h.segment_seconds > 0.0 && h.every >= 2) {
-        return Err(RequestError::InvalidHoldout {
-            segment_seconds: h.segment_seconds,
-            every: h.every,
-        });
-    }
-    let (structure, vehicle) = (req.structure.rotor_count(), req.vehicle.rotor_count());
-    if structure != vehicle {
-        return Err(RequestError::StructureMismatch { structure, vehicle });
-    }
-    crate::inputs::check_logs(&req.logs, &req.validate)
-}
-
-/// The error of a single fit log none of whose samples was held out (`log`, read as
-/// `req.logs[0]`): its time looks logged in ms or µs (bad input), else it is too short
-/// for the hold-out, or sampled more coarsely than its segments.
-fn no_holdout(req: &FitRequest, log: &LogStats) -> Error {
-    let s = &log.summary;
-    let (span, median_step) = match &req.logs[0] {
-        LogSource::Memory(m) => {
-            let first = m.chunks().first().and_then(|c| c.t.first());
-            let last = m.chunks().last().and_then(|c| c.t.last());
-            (first.zip(last).map_or(0.0, |(a, b)| b - a), None)
-        }
-        LogSource::File(_) => (s.span, s.median_time_step),
-    };
-    let samples = log.fit.count() + log.held_out.count();
-    let consequence = ", so no sample falls in a held-out segment";
-    if let Some(text) = io::validate::time_unit_suspect(median_step, span, samples, consequence) {
-        return io::IoError::new(
-            &s.file,
-            io::Location::File,
-            None,
-            io::ErrorKind::Mapping(text),
-        )
-        .into();
-    }
-    RequestError::HoldoutTooShort {
-        log: s.file.clone(),
-        samples,
-        span,
-        median_step,
-        segment_seconds: req.holdout.segment_seconds,
-        every: req.holdout.every,
-    }
-    .into()
 }
 
 /// Runs the pipeline.
