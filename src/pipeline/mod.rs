@@ -13,7 +13,7 @@
 //! 20 % of the data in 2 s segments by default. Rows of a time series are never
 //! sampled at random.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::Ordering;
 
 use crate::diagnose::local::{ActivityParts, LocalFolds, LocalRegions};
 use crate::diagnose::{
@@ -26,21 +26,21 @@ use crate::estimate::{
     self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, Folds, ResidualDiagnostics,
     ResidualPass,
 };
-use crate::identified::IdentifiedModel;
-use crate::io::derive::{JerkScratch, rotor_jerk};
-use crate::io::{self, DeriveOptions, LogReader, Mapping, ReadOptions, Summary};
+use crate::io::{self, LogReader, ReadOptions, Summary};
 use crate::model::{ModelStructure, Reuse, Workspace};
 use crate::sample::{CHUNK_SAMPLES, SampleChunk, Signals};
-use crate::slow::SlowThrust;
 use crate::source::LogSource;
 use crate::spill::{Spill, SpillWriter};
 use crate::stats::{AccumulateError, Accumulator, stored_columns_of};
 
+mod feed;
 mod request;
 mod threads;
 
+pub use feed::stream_for_model;
 pub use request::{FitRequest, Holdout};
 
+use feed::Feed;
 use request::{check, no_holdout};
 use threads::{run_in_order, run_jobs, segments};
 
@@ -303,106 +303,6 @@ fn stream_log(
             .and(summary)
             .and_then(|s| feed.finish().map(|()| s))
     })
-}
-
-/// What happens to each chunk of a log before its consumer sees it: Ω̈ derived from Ω̇
-/// ([`rotor_jerk`]), progress counted and, for a diagnosis or a model with a trim
-/// moment, the slow rotor thrusts filled in ([`SlowThrust`]; chunks then reach the
-/// consumer up to a few seconds of samples later, in order, the last ones at
-/// [`Feed::finish`]).
-struct Feed<'p, C> {
-    derive: DeriveOptions,
-    progress: Option<&'p AtomicU64>,
-    jerk: JerkScratch,
-    /// The slow rotor thrusts are wanted; the stage once the first chunk is in.
-    slow_wanted: bool,
-    slow: Option<SlowThrust>,
-    consume: C,
-}
-
-impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
-    /// The feed of a fit: the slow thrusts for a diagnosis.
-    fn of_fit(req: &'p FitRequest, consume: C) -> Self {
-        Self::new(jerk_options(req), req.diagnose.is_some(), consume)
-            .counting(req.progress.as_deref())
-    }
-
-    fn new(derive: DeriveOptions, slow_wanted: bool, consume: C) -> Self {
-        Self {
-            derive,
-            progress: None,
-            jerk: JerkScratch::default(),
-            slow_wanted,
-            slow: None,
-            consume,
-        }
-    }
-
-    fn counting(self, progress: Option<&'p AtomicU64>) -> Self {
-        Self { progress, ..self }
-    }
-
-    fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
-        rotor_jerk(chunk, &self.derive, &mut self.jerk);
-        let (progress, consume) = (self.progress, &mut self.consume);
-        let mut deliver = |c: &SampleChunk| {
-            if let Some(p) = progress {
-                p.fetch_add(c.len() as u64, Ordering::Relaxed);
-            }
-            consume(c)
-        };
-        if !self.slow_wanted {
-            return deliver(chunk);
-        }
-        let rotors = chunk.rotor_count();
-        let stage = self.slow.get_or_insert_with(|| SlowThrust::new(rotors));
-        // A copy is held: the reader's chunk goes back to it.
-        stage.push(chunk.clone(), |c| deliver(&c))
-    }
-
-    fn finish(&mut self) -> Result<(), Error> {
-        let (progress, consume) = (self.progress, &mut self.consume);
-        match self.slow.as_mut() {
-            Some(stage) => stage.finish(|c| {
-                if let Some(p) = progress {
-                    p.fetch_add(c.len() as u64, Ordering::Relaxed);
-                }
-                consume(&c)
-            }),
-            None => Ok(()),
-        }
-    }
-}
-
-/// Streams the log file at `path` as `model` needs it: read with `mapping`, cut into the
-/// chunks a fit cuts, with the rates of rotor acceleration and the slow rotor thrusts
-/// derived as the fit pipeline derives them (so `predict` and `validate` see the
-/// samples the fit saw), each chunk handed to `consume` in order.
-pub fn stream_for_model(
-    model: &IdentifiedModel,
-    path: &std::path::Path,
-    mapping: Option<&Mapping>,
-    consume: impl FnMut(&SampleChunk) -> Result<(), Error>,
-) -> Result<(), Error> {
-    let read = ReadOptions::default();
-    let derive = mapping.and_then(|m| m.derive).unwrap_or(read.derive);
-    let mut feed = Feed::new(derive, model.structure.needs_slow_thrust(), consume);
-    let mut reader = io::open_log(path, &model.vehicle, mapping, &read)?;
-    reader.join_segments();
-    while let Some(chunk) = reader.next_chunk_mut() {
-        feed.push(chunk?)?;
-    }
-    feed.finish()
-}
-
-/// Differentiator of the rates of rotor acceleration ([`rotor_jerk`], on the re-cut
-/// chunks of every log alike): the mapping file's `[derive]` table when given, else the
-/// request's read options.
-fn jerk_options(req: &FitRequest) -> DeriveOptions {
-    req.mapping
-        .as_ref()
-        .and_then(|m| m.derive)
-        .unwrap_or(req.read.derive)
 }
 
 /// Re-cuts the chunks of a log in memory (across segment boundaries) into chunks of exactly
