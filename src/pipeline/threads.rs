@@ -6,7 +6,8 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use super::{FitRequest, Role};
+use super::FitRequest;
+use super::split::Role;
 use crate::error::{Error, RequestError};
 use crate::source::LogSource;
 
