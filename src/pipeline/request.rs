@@ -4,7 +4,7 @@
 use std::sync::Arc;
 use std::sync::atomic::AtomicU64;
 
-use super::LogStats;
+use super::first_pass::LogStats;
 use crate::diagnose::DiagnoseOptions;
 use crate::error::{Error, RequestError};
 use crate::estimate::FitOptions;
