@@ -15,7 +15,7 @@
 
 use std::sync::atomic::Ordering;
 
-use crate::diagnose::local::{ActivityParts, LocalFolds, LocalRegions};
+use crate::diagnose::local::{ActivityParts, LocalRegions};
 use crate::diagnose::{
     Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis,
     SCREENING_SAMPLES, Thinned, candidate_set_on_threads, diagnose_on_threads,
@@ -23,8 +23,7 @@ use crate::diagnose::{
 };
 use crate::error::{Error, RequestError};
 use crate::estimate::{
-    self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, Folds, ResidualDiagnostics,
-    ResidualPass,
+    self, AxisMetrics, CrossValidation, DiagnosticOptions, Fit, ResidualDiagnostics, ResidualPass,
 };
 use crate::io::Summary;
 use crate::model::{ModelStructure, Reuse, Workspace};
@@ -35,6 +34,7 @@ use crate::stats::{AccumulateError, Accumulator, stored_columns_of};
 
 mod feed;
 mod first_pass;
+mod folds;
 mod request;
 mod split;
 mod stream;
@@ -44,6 +44,7 @@ pub use feed::stream_for_model;
 pub use request::{FitRequest, Holdout};
 
 use first_pass::{LogCounts, read_log};
+use folds::{arrange, local_folds, merge};
 use request::{check, no_holdout};
 use split::{Role, Splitter, jobs};
 use stream::stream_log;
@@ -110,50 +111,6 @@ fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
     if let Some(p) = &req.progress {
         p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
     }
-}
-
-/// Merges statistics of the same structure (they always have its shape).
-fn merge(into: &mut Accumulator, other: &Accumulator) -> Result<(), Error> {
-    into.merge(other).map_err(|source| Error::Accumulate {
-        log: "merged statistics".into(),
-        source,
-    })
-}
-
-/// The fit logs' statistics ((fit, held-out) per log, job order) arranged for
-/// cross-validation and the final fit: leave one log out with two or more logs, else the
-/// log's hold-out segments (which `run` has checked hold samples). Returns the folds and
-/// the final fit data: all fit logs, the held-out segments of a single log included only
-/// when validation logs report instead.
-fn arrange(req: &FitRequest, parts: &[[&Accumulator; 2]]) -> Result<(Folds, Accumulator), Error> {
-    let merged = |pair: &[&Accumulator; 2]| -> Result<Accumulator, Error> {
-        let mut a = pair[0].clone();
-        merge(&mut a, pair[1])?;
-        Ok(a)
-    };
-    if let [single] = parts {
-        let folds = Folds::holdout("hold-out segments", single[0].clone(), single[1].clone());
-        let fit = if req.validate.is_empty() {
-            single[0].clone()
-        } else {
-            merged(single)?
-        };
-        return Ok((folds, fit));
-    }
-    let logs = parts
-        .iter()
-        .zip(&req.logs)
-        .map(|(pair, source)| Ok((source.name(), merged(pair)?)))
-        .collect::<Result<Vec<_>, Error>>()?;
-    let folds = Folds::leave_one_out(&logs).map_err(|source| Error::Accumulate {
-        log: "leave-one-out folds".into(),
-        source,
-    })?;
-    let mut fit = logs[0].1.clone();
-    for (_, a) in &logs[1..] {
-        merge(&mut fit, a)?;
-    }
-    Ok((folds, fit))
 }
 
 /// Runs the pipeline.
@@ -457,24 +414,6 @@ fn second_pass(
         req.threads,
     )?);
     Ok(())
-}
-
-/// The held-out statistics where each local candidate acts, per fold as [`arrange`]
-/// builds the folds (`parts`: each fit log's local statistics, see [`local_kind`]): the
-/// hold-out part of a single log, or each whole log left out. A region with no active
-/// held-out sample in some fold is left out (judged globally).
-fn local_folds(
-    regions: &LocalRegions,
-    parts: &[Vec<Accumulator>],
-    folds: &Folds,
-) -> Vec<LocalFolds> {
-    let regions = regions.candidates.iter().enumerate();
-    regions
-        .filter_map(|(r, &candidate)| {
-            let tests = parts.iter().map(|log| log[r].clone()).collect();
-            LocalFolds::new(candidate, folds, tests)
-        })
-        .collect()
 }
 
 /// Appends a log's plot series after the logs before it on the plots' time axis
