@@ -56,9 +56,10 @@ pub(super) fn arrange(
 }
 
 /// The held-out statistics where each local candidate acts, per fold as [`arrange`]
-/// builds the folds (`parts`: each fit log's local statistics, see [`super::local_kind`]): the
-/// hold-out part of a single log, or each whole log left out. A region with no active
-/// held-out sample in some fold is left out (judged globally).
+/// builds the folds (`parts`: each fit log's local statistics, see
+/// [`super::second_pass::local_kind`]): the hold-out part of a single log, or each whole
+/// log left out. A region with no active held-out sample in some fold is left out
+/// (judged globally).
 pub(super) fn local_folds(
     regions: &LocalRegions,
     parts: &[Vec<Accumulator>],

@@ -2,8 +2,9 @@
 //! the fit samples' residuals, the plotted samples' predictions and, when diagnosing,
 //! every candidate effect's statistics folded into the segment's [`LogPass`] share.
 
+use super::accumulate_error;
+use super::second_pass::{LogPass, PassContext, Start, local_kind};
 use super::split::{Role, Splitter};
-use super::{LogPass, PassContext, Start, accumulate_error, local_kind};
 use crate::diagnose::local::ActivityParts;
 use crate::error::Error;
 use crate::model::Workspace;

@@ -48,8 +48,8 @@ pub(super) fn run_jobs<T: Send>(
         .collect()
 }
 
-/// Most chunks per segment of a log's second pass ([`super::pass_log`]): a log of up to 64
-/// chunks (65 536 samples) is one segment.
+/// Most chunks per segment of a log's second pass (`second_pass::pass_log`): a log of up
+/// to 64 chunks (65 536 samples) is one segment.
 const SEGMENT_CHUNKS: usize = 64;
 
 /// A longer log is cut into a multiple of this many segments of equal length (to a
