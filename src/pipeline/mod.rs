@@ -10,7 +10,7 @@
 //! Hold-out: without explicit validation logs, each log's time axis is cut into
 //! contiguous segments of [`Holdout::segment_seconds`] from its first sample, and every
 //! [`Holdout::every`]-th segment (the last of each group) is held out for validation —
-//! 20 % of the data in 2 s segments by default. Rows of a time series are never
+//! [`Holdout::DEFAULT`] by default. Rows of a time series are never
 //! sampled at random.
 //!
 //! One concept a file: `request` (what is asked, and its checks), `split` (hold-out

@@ -24,14 +24,19 @@ pub struct Holdout {
 
 impl Default for Holdout {
     fn default() -> Self {
-        Self {
-            segment_seconds: 2.0,
-            every: 5,
-        }
+        Self::DEFAULT
     }
 }
 
 impl Holdout {
+    /// The hold-out of a single fit log unless asked otherwise, the one place it is
+    /// written: every 5th 2 s segment (20 % of the log, the first held-out segment
+    /// from 8 s on).
+    pub const DEFAULT: Holdout = Holdout {
+        segment_seconds: 2.0,
+        every: 5,
+    };
+
     /// True when the sample at `t` (s), in a log starting at `t0` (s), is held out.
     pub fn holds_out(&self, t: f64, t0: f64) -> bool {
         let segment = ((t - t0) / self.segment_seconds).floor() as usize;
