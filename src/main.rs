@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use mrsysid::model::{InflowCorrection, ModelOptions, RotorInertiaTerms};
+use mrsysid::pipeline::Holdout;
 use mrsysid::sim::Effect;
 use mrsysid::sim::flight::FlightConfig;
 use mrsysid::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate_to_file};
@@ -87,13 +88,11 @@ struct FitArgs {
     #[command(flatten)]
     model: ModelArgs,
     /// Logs for the validation figures only: no decision (term selection, candidate
-    /// effects) sees them. Decisions are cross-validated on the fit logs: with two or
-    /// more, each log is predicted by the model fitted on the others; a single log has
-    /// every 5th 2-second segment held out.
-    #[arg(long, num_args = 1..)]
+    /// effects) sees them (help text: [`validate_help`]).
+    #[arg(long, num_args = 1.., help = validate_help())]
     validate: Vec<PathBuf>,
     /// Hold-out segment length of a single fit log, s.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = Holdout::DEFAULT.segment_seconds)]
     holdout_segment: f64,
     /// Write the JSON report here.
     #[arg(long)]
@@ -292,6 +291,19 @@ fn simulate(args: &SimulateArgs) -> Result<(), commands::Failure> {
         .map_err(|e| commands::Failure::input(e.to_string()))?;
     commands::print_err(&format!("wrote {rows} rows to {}", args.out.display()));
     Ok(())
+}
+
+/// The help of `fit --validate`, with the hold-out default of a single log as the library
+/// defines it ([`Holdout::DEFAULT`]).
+fn validate_help() -> String {
+    let h = Holdout::DEFAULT;
+    format!(
+        "Logs for the validation figures only: no decision (term selection, candidate \
+         effects) sees them. Decisions are cross-validated on the fit logs: with two or \
+         more, each log is predicted by the model fitted on the others; a single log has \
+         every {}th {}-second segment held out",
+        h.every, h.segment_seconds
+    )
 }
 
 impl FitArgs {

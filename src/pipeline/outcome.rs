@@ -1,0 +1,74 @@
+//! What the pipeline hands back: the Eq. 22 fit with its cross-validation and
+//! validation figures, the second pass's residual diagnostics and plot series, and the
+//! diagnosis.
+
+use super::FitRequest;
+use crate::diagnose::Diagnosis;
+use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
+use crate::io::Summary;
+use crate::stats::Accumulator;
+
+/// Decimated measured/predicted series for plots, per axis.
+#[derive(Debug, Clone, Default)]
+pub struct PlotSeries {
+    /// Time, s (logs are laid end to end).
+    pub t: Vec<f64>,
+    /// Measured output per axis.
+    pub measured: [Vec<f64>; 6],
+    /// Model output per axis.
+    pub predicted: [Vec<f64>; 6],
+}
+
+/// What the pipeline produced.
+#[derive(Debug, Clone)]
+pub struct FitOutcome {
+    /// The estimates.
+    pub fit: Fit,
+    /// Fit statistics (for refits with candidate effects).
+    pub fit_stats: Accumulator,
+    /// Statistics of the reporting-only validation logs (no samples without them).
+    pub validation_stats: Accumulator,
+    /// Goodness of fit of the Eq. 22 model on the validation logs when given, else
+    /// cross-validated (all folds pooled).
+    pub validation: [AxisMetrics; 6],
+    /// Samples behind `validation`.
+    pub validation_samples: u64,
+    /// Cross-validation of the Eq. 22 model: fold names and held-out errors.
+    pub cross_validation: (Vec<String>, CrossValidation),
+    /// Residual diagnostics of the fit data (second pass).
+    pub diagnostics: Option<ResidualDiagnostics>,
+    /// Fit-data series for plots (second pass).
+    pub fit_series: PlotSeries,
+    /// Validation-data series for plots (second pass).
+    pub validation_series: PlotSeries,
+    /// One reader summary per log, fit logs first.
+    pub summaries: Vec<Summary>,
+    /// Description of the validation data.
+    pub validation_source: String,
+    /// Closing-the-loop result.
+    pub diagnosis: Option<Diagnosis>,
+    /// Coloured-residual variance inflation κ = (1 + ρ)/(1 − ρ) of the Eq. 22 fit's
+    /// residuals (ρ the largest lag-1 autocorrelation over the axes), ≥ 1; 1 when the
+    /// second pass did not run. σ² of white residuals times κ is the corrected variance.
+    pub variance_inflation: f64,
+}
+
+/// Where the validation figures of a request come from, for the report.
+pub(super) fn validation_source(req: &FitRequest) -> String {
+    let n_fit = req.logs.len();
+    if !req.validate.is_empty() {
+        format!(
+            "{} validation log(s), not used for any decision",
+            req.validate.len()
+        )
+    } else if n_fit > 1 {
+        format!(
+            "leave one log out over {n_fit} logs (each predicted by the model fitted on the others), pooled"
+        )
+    } else {
+        format!(
+            "hold-out: every {}th {:.1} s segment of the fit log",
+            req.holdout.every, req.holdout.segment_seconds
+        )
+    }
+}

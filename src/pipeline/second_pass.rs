@@ -1,0 +1,355 @@
+//! The second pass, after the Eq. 22 fit: every log streamed again (a file from its
+//! spill) in segments on the log's threads, for the residual diagnostics of the fit
+//! samples, decimated plot series of both parts and, when diagnosing, the statistics of
+//! every candidate effect, which it hands to the diagnosis with the folds of the first
+//! pass.
+
+use std::sync::atomic::Ordering;
+
+use super::first_pass::LogCounts;
+use super::folds::{arrange, local_folds, merge};
+use super::segment_pass::SegmentPass;
+use super::split::Role;
+use super::stream::stream_log;
+use super::threads::{run_in_order, run_jobs, segments};
+use super::{FitOutcome, FitRequest, PlotSeries, accumulate_error};
+use crate::diagnose::local::{ActivityParts, LocalRegions};
+use crate::diagnose::{
+    Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, candidate_set_on_threads,
+    diagnose_on_threads, hover_thrust_coefficient,
+};
+use crate::error::Error;
+use crate::estimate::{DiagnosticOptions, Fit, ResidualDiagnostics, ResidualPass};
+use crate::model::{ModelStructure, Reuse};
+use crate::sample::{SampleChunk, Signals};
+use crate::source::LogSource;
+use crate::spill::Spill;
+use crate::stats::{Accumulator, stored_columns_of};
+
+/// Samples per segment, on average over a fit log, below which the log is taken for a
+/// sweep's points rather than a time series (no trim-moment candidates).
+const MIN_SEGMENT_SAMPLES: u64 = 256;
+
+pub(super) fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
+    if let Some(p) = &req.progress {
+        p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
+    }
+}
+
+/// Points kept per plotted series: buckets of the whole run keep their first sample.
+const PLOT_POINTS: u64 = 4000;
+
+/// Candidate effects added to the base structure, with their parameter indices.
+pub(super) struct Extended {
+    pub(super) structure: ModelStructure,
+    pub(super) candidates: Vec<Candidate>,
+    pub(super) params: Vec<Vec<usize>>,
+    pub(super) regions: LocalRegions,
+    /// The columns its accumulators store, and how they are assembled from each other.
+    pub(super) stored: Vec<bool>,
+    pub(super) plan: Vec<Option<Reuse>>,
+}
+
+impl Extended {
+    /// Named candidates for data with `signals`, plus the generic-pool terms that
+    /// survive screening on `screening` (thinned fit samples).
+    fn new(
+        req: &FitRequest,
+        fit: &Fit,
+        signals: Signals,
+        slow_thrust: bool,
+        screening: &SampleChunk,
+        options: &DiagnoseOptions,
+    ) -> Result<Self, Error> {
+        let ctx = CandidateContext {
+            vehicle: &req.vehicle,
+            structure: &req.structure,
+            theta: &fit.mmr.theta,
+            has_height: signals.height,
+            has_omega_dot: signals.omega_dot,
+            has_omega_ddot: signals.omega_ddot,
+            has_attitude: signals.attitude,
+            has_slow_thrust: slow_thrust,
+            hover_thrust_coefficient: hover_thrust_coefficient(&req.vehicle, &[screening]),
+        };
+        let set = candidate_set_on_threads(&ctx, Some(screening), options, req.threads)?;
+        let stored = stored_columns_of(&set.extended);
+        Ok(Self {
+            plan: set.extended.reuse_plan(&stored),
+            stored,
+            structure: set.extended,
+            candidates: set.candidates,
+            params: set.params,
+            regions: set.regions,
+        })
+    }
+}
+
+/// What every log's second pass shares (read only).
+pub(super) struct PassContext<'a> {
+    pub(super) req: &'a FitRequest,
+    /// MMR estimates θ̂ in `req.structure.params` order.
+    pub(super) theta: &'a [f64],
+    /// An empty residual pass to start each log from.
+    pub(super) residuals: ResidualPass,
+    /// Candidate effects, when diagnosing.
+    pub(super) extended: Option<Extended>,
+    /// Plot decimation: every `stride`-th sample of the whole run (fit, validation).
+    pub(super) strides: [u64; 2],
+}
+
+/// One log's share of the second pass. Shares merge in job order into the result of a
+/// pass over all logs one after another.
+pub(super) struct LogPass {
+    pub(super) residuals: ResidualPass,
+    /// Plot series (fit, validation); time counted from `span.0` of the kind.
+    pub(super) series: [PlotSeries; 2],
+    /// First and last sample time of each kind in this log, s (NaN when none).
+    pub(super) span: [(f64, f64); 2],
+    /// Candidate-effect statistics (fitted, held-out samples), when diagnosing.
+    pub(super) candidates: Option<[Accumulator; 2]>,
+    /// The same over the samples where local candidates act, by activity pattern, from
+    /// the kind [`local_kind`] names (empty for a validation log).
+    pub(super) local: ActivityParts,
+}
+
+/// Which samples of a log (fit: false, held-out: true) the local-region statistics are
+/// built from: the held-out part of a single fit log, every sample of each of several
+/// fit logs (each is left out in turn), none of a validation log (it reports, never
+/// decides). [`local_folds`] uses nothing else.
+pub(super) fn local_kind(role: Role) -> Option<bool> {
+    match role {
+        Role::Fit => Some(false),
+        Role::Split(_) => Some(true),
+        Role::Validation => None,
+    }
+}
+
+/// Streams the data again (each log file from its spill, in job order with `jobs`):
+/// residual diagnostics of the fit samples, decimated series of both parts for plots,
+/// and the statistics of every candidate effect. Logs are passed on up to `req.threads`
+/// threads and their shares merged in job order, so the result does not depend on the
+/// thread count.
+pub(super) fn second_pass(
+    req: &FitRequest,
+    jobs: &[(LogSource, Role)],
+    spills: &[Option<Spill>],
+    counts: &[LogCounts],
+    signals: Option<Signals>,
+    screening: &SampleChunk,
+    out: &mut FitOutcome,
+) -> Result<(), Error> {
+    let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
+    let ctx = PassContext {
+        req,
+        theta: &out.fit.mmr.theta,
+        residuals: ResidualPass::new(&req.structure, &out.fit, DiagnosticOptions::default()),
+        extended: match (&req.diagnose, signals) {
+            (Some(options), Some(s)) => {
+                // Time series, not a sweep's points: the slow thrusts have a slow part.
+                let fit_logs = &out.summaries[..req.logs.len()];
+                let time_series = fit_logs
+                    .iter()
+                    .all(|s| s.samples >= MIN_SEGMENT_SAMPLES * s.segments.max(1) as u64);
+                let slow = s.omega_squared_slow && time_series;
+                Some(Extended::new(req, &out.fit, s, slow, screening, options)?)
+            }
+            _ => None,
+        },
+        strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.kinds[k]).sum())),
+    };
+    // Samples of each kind before each log: its first sample's place in the decimation.
+    let starts: Vec<[u64; 2]> = counts
+        .iter()
+        .scan([0u64; 2], |seen, c| {
+            let start = *seen;
+            seen[0] += c.kinds[0];
+            seen[1] += c.kinds[1];
+            Some(start)
+        })
+        .collect();
+    let shares = run_jobs(jobs, req, |i, path, role, threads| {
+        let at = Start {
+            seen: starts[i],
+            in_log: [0; 2],
+            t0: counts[i].t0,
+        };
+        let log = Log {
+            source: path,
+            spill: spills[i].as_ref(),
+            role,
+            chunks: counts[i].chunks,
+        };
+        pass_log(&ctx, &log, threads, at)
+    })?;
+    let mut residuals: Option<ResidualPass> = None;
+    let mut t_offset = [0.0f64; 2];
+    for share in &shares {
+        match residuals.as_mut() {
+            Some(r) => r.merge(&share.residuals),
+            None => residuals = Some(share.residuals.clone()),
+        }
+        lay_end_to_end(
+            share,
+            &mut t_offset,
+            &mut out.fit_series,
+            &mut out.validation_series,
+        );
+    }
+    let Some(residuals) = residuals else {
+        return Ok(());
+    };
+    let diagnostics = residuals.finish();
+    let inflation = coloured_variance_inflation(&diagnostics);
+    out.variance_inflation = inflation;
+    out.diagnostics = Some(diagnostics);
+    let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
+        return Ok(());
+    };
+    let local_parts = shares
+        .iter()
+        .zip(jobs)
+        .take(req.logs.len())
+        .map(|(s, (source, _))| {
+            let regions = ext.regions.per_region(&s.local, &ext.structure);
+            regions.map_err(accumulate_error(source))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let per_log: Vec<[Accumulator; 2]> = shares.into_iter().filter_map(|s| s.candidates).collect();
+    let n_fit = req.logs.len();
+    if per_log.len() != jobs.len() {
+        return Ok(());
+    }
+    let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit].iter().map(|[a, b]| [a, b]).collect();
+    let (folds, fit) = arrange(req, &parts)?;
+    let mut report = Accumulator::new(&ext.structure);
+    for [_, held_out] in &per_log[n_fit..] {
+        merge(&mut report, held_out)?;
+    }
+    let local = local_folds(&ext.regions, &local_parts, &folds);
+    options.variance_inflation = options.variance_inflation.max(inflation);
+    let stats = CandidateStatistics {
+        extended: &ext.structure,
+        candidates: &ext.candidates,
+        candidate_params: &ext.params,
+        base_params: req.structure.params.len(),
+        fit: &fit,
+        folds: &folds,
+        report: (report.count() > 0).then_some(&report),
+        local: &local,
+    };
+    out.diagnosis = Some(diagnose_on_threads(
+        &stats,
+        &req.fit,
+        &options,
+        req.threads,
+    )?);
+    Ok(())
+}
+
+/// Appends a log's plot series after the logs before it on the plots' time axis
+/// (`t_offset`: time already laid out per kind, s).
+fn lay_end_to_end(
+    share: &LogPass,
+    t_offset: &mut [f64; 2],
+    fit: &mut PlotSeries,
+    validation: &mut PlotSeries,
+) {
+    for (k, series) in [fit, validation].into_iter().enumerate() {
+        let part = &share.series[k];
+        series.t.extend(part.t.iter().map(|t| t + t_offset[k]));
+        for a in 0..6 {
+            series.measured[a].extend_from_slice(&part.measured[a]);
+            series.predicted[a].extend_from_slice(&part.predicted[a]);
+        }
+        let (first, last) = share.span[k];
+        if first.is_finite() {
+            t_offset[k] += last - first;
+        }
+    }
+}
+
+/// Where a segment of a log's second pass starts.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Start {
+    /// Samples of each kind (fit, validation) before it, in this log and the logs before.
+    pub(super) seen: [u64; 2],
+    /// The same in this log only.
+    pub(super) in_log: [u64; 2],
+    /// Time the log's hold-out segments count from, s.
+    pub(super) t0: Option<f64>,
+}
+
+/// A log as its second pass reads it.
+struct Log<'a> {
+    source: &'a LogSource,
+    /// Its parsed chunks, for a log file.
+    spill: Option<&'a Spill>,
+    role: Role,
+    /// Chunks it is read in (from the first pass).
+    chunks: usize,
+}
+
+/// The second pass over one log, from its spill when there is one, in the segments
+/// [`segments`] cuts: each segment is passed from a fresh state (on up to `threads`
+/// threads when read from a spill) and the segments' shares are merged in order, so the
+/// result depends on the log alone, never on the thread count or on whether the log
+/// came from a file or from memory.
+fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<LogPass, Error> {
+    let (source, role) = (log.source, log.role);
+    let mut share = LogPass::empty(ctx);
+    let mut append = |part: LogPass| share.append(part).map_err(accumulate_error(source));
+    let cuts = segments(log.spill.map_or(log.chunks, Spill::chunks));
+    match log.spill {
+        Some(spill) => {
+            let pass_segment = |s: usize| {
+                let chunks = cuts[s].clone();
+                let in_log = if chunks.is_empty() {
+                    [0; 2]
+                } else {
+                    spill.before(chunks.start)
+                };
+                let seen = [0, 1].map(|k| at.seen[k] + in_log[k]);
+                let start = Start { seen, in_log, ..at };
+                let mut pass = SegmentPass::new(ctx, source, role, start);
+                // Spilled with its Ω̈ (derived in the first pass).
+                spill.stream_chunks(chunks, |chunk| {
+                    count_progress(ctx.req, chunk);
+                    pass.push(chunk)
+                })?;
+                pass.finish()
+            };
+            run_in_order(cuts.len(), threads, pass_segment, &mut append)?;
+        }
+        None => {
+            let mut pass = SegmentPass::new(ctx, source, role, at);
+            // Chunks read so far, and the segment being passed.
+            let (mut read, mut segment) = (0, 0);
+            stream_log(source, ctx.req, threads, |chunk| {
+                if cuts.get(segment + 1).is_some_and(|next| next.start == read) {
+                    let next = SegmentPass::new(ctx, source, role, pass.next_start());
+                    append(std::mem::replace(&mut pass, next).finish()?)?;
+                    segment += 1;
+                }
+                read += 1;
+                pass.push(chunk)
+            })?;
+            append(pass.finish()?)?;
+        }
+    }
+    share.times_from_start();
+    Ok(share)
+}
+
+/// (1 + ρ)/(1 − ρ) for the largest lag-1 residual autocorrelation ρ over the axes (an
+/// AR(1) effective-sample-size correction of parameter variances), held in [1, 100].
+fn coloured_variance_inflation(d: &ResidualDiagnostics) -> f64 {
+    let rho = d
+        .axes
+        .iter()
+        .filter_map(|a| a.autocorrelation.get(1).copied())
+        .filter(|r| r.is_finite())
+        .fold(0.0_f64, f64::max)
+        .min(0.98);
+    ((1.0 + rho) / (1.0 - rho)).clamp(1.0, 100.0)
+}
