@@ -30,6 +30,43 @@ pub(super) struct LogStats {
     pub(super) t0: Option<f64>,
     /// Chunks the log was read in.
     pub(super) chunks: usize,
+    /// Its runs of samples ([`Runs`]).
+    pub(super) runs: Runs,
+}
+
+/// A break in the samples longer than this (s) starts a new run.
+const RUN_BREAK_SECONDS: f64 = 0.1;
+
+/// Samples per run, on average over a log, below which it is taken for a sweep's points
+/// rather than a time series: a time series has long runs, a sweep's points come one or
+/// two at a time.
+const MIN_RUN_SAMPLES: u64 = 256;
+
+/// Runs of samples without a break longer than [`RUN_BREAK_SECONDS`], counted from the
+/// samples themselves as the pipeline streams them (so a log gives the same count from a
+/// file and from memory, whatever its reader calls a segment).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Runs {
+    samples: u64,
+    runs: u64,
+    last: Option<f64>,
+}
+
+impl Runs {
+    fn push(&mut self, t: &[f64]) {
+        for &tk in t {
+            if self.last.is_none_or(|last| tk - last > RUN_BREAK_SECONDS) {
+                self.runs += 1;
+            }
+            self.last = Some(tk);
+        }
+        self.samples += t.len() as u64;
+    }
+
+    /// True for a time series: long runs on average.
+    pub(super) fn time_series(&self) -> bool {
+        self.samples >= MIN_RUN_SAMPLES * self.runs.max(1)
+    }
 }
 
 /// What the second pass needs to know of a log from the first, in job order.
@@ -41,6 +78,8 @@ pub(super) struct LogCounts {
     pub(super) t0: Option<f64>,
     /// Chunks the log is read in (the same in both passes).
     pub(super) chunks: usize,
+    /// The log is a time series ([`Runs::time_series`]).
+    pub(super) time_series: bool,
 }
 
 /// Reads one log, routing each sample to the fit or validation statistics; `share` is
@@ -77,8 +116,10 @@ pub(super) fn read_log(
             .map_err(accumulate_error(source))
     };
     let mut chunks = 0;
+    let mut runs = Runs::default();
     let summary = stream_log(source, req, share, |chunk| {
         chunks += 1;
+        runs.push(&chunk.t);
         signals.get_or_insert_with(|| chunk.signals());
         let kinds = split.route(chunk, &mut sink)?;
         if let Some(w) = spill.as_mut() {
@@ -96,5 +137,6 @@ pub(super) fn read_log(
         spill: spill.map(SpillWriter::finish).transpose()?,
         t0: split.t0,
         chunks,
+        runs,
     })
 }

@@ -81,6 +81,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
             kinds: [s.fit.count(), s.held_out.count()],
             t0: s.t0,
             chunks: s.chunks,
+            time_series: s.runs.time_series(),
         })
         .collect();
     let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit]

@@ -26,10 +26,6 @@ use crate::source::LogSource;
 use crate::spill::Spill;
 use crate::stats::{Accumulator, stored_columns_of};
 
-/// Samples per segment, on average over a fit log, below which the log is taken for a
-/// sweep's points rather than a time series (no trim-moment candidates).
-const MIN_SEGMENT_SAMPLES: u64 = 256;
-
 pub(super) fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
     if let Some(p) = &req.progress {
         p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
@@ -147,10 +143,7 @@ pub(super) fn second_pass(
         extended: match (&req.diagnose, signals) {
             (Some(options), Some(s)) => {
                 // Time series, not a sweep's points: the slow thrusts have a slow part.
-                let fit_logs = &out.summaries[..req.logs.len()];
-                let time_series = fit_logs
-                    .iter()
-                    .all(|s| s.samples >= MIN_SEGMENT_SAMPLES * s.segments.max(1) as u64);
+                let time_series = counts[..req.logs.len()].iter().all(|c| c.time_series);
                 let slow = s.omega_squared_slow && time_series;
                 Some(Extended::new(req, &out.fit, s, slow, screening, options)?)
             }
