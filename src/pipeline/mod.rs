@@ -31,6 +31,7 @@ mod feed;
 mod first_pass;
 mod folds;
 mod outcome;
+mod remainder;
 mod request;
 mod second_pass;
 mod segment_pass;

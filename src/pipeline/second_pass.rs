@@ -8,6 +8,7 @@ use std::sync::atomic::Ordering;
 
 use super::first_pass::LogCounts;
 use super::folds::{arrange, local_folds, merge};
+use super::remainder::remainder;
 use super::segment_pass::SegmentPass;
 use super::split::Role;
 use super::stream::stream_log;
@@ -231,12 +232,11 @@ pub(super) fn second_pass(
         report: (report.count() > 0).then_some(&report),
         local: &local,
     };
-    out.diagnosis = Some(diagnose_on_threads(
-        &stats,
-        &req.fit,
-        &options,
-        req.threads,
-    )?);
+    let mut diagnosis = diagnose_on_threads(&stats, &req.fit, &options, req.threads)?;
+    if counts[..n_fit].iter().all(|c| c.time_series) {
+        diagnosis.remainder = remainder(req, jobs, spills, &diagnosis)?;
+    }
+    out.diagnosis = Some(diagnosis);
     Ok(())
 }
 

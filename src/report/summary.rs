@@ -7,6 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::diagnose::{CandidateScore, Diagnosis, Reading, Role};
+use crate::estimate::remainder::AxisRemainder;
 use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
 use crate::model::{ModelOptions, ModelStructure};
 use crate::sample::Axis;
@@ -122,6 +123,10 @@ pub struct DiagnosisReport {
     /// The search stopped at its effect limit with candidates left.
     #[serde(default)]
     pub stopped_at_limit: bool,
+    /// What is left in each moment axis's residual: its correlation with the axis's
+    /// rotor signals over lags (time series only).
+    #[serde(default)]
+    pub remainder: Vec<AxisRemainder>,
 }
 
 /// An effect (candidate) with its estimates.
@@ -282,6 +287,7 @@ impl From<&Diagnosis> for DiagnosisReport {
                 .collect(),
             findings: d.findings.clone(),
             stopped_at_limit: d.stopped_at_limit,
+            remainder: d.remainder.clone(),
         }
     }
 }

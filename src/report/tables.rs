@@ -149,6 +149,9 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
         );
     }
     named_share(&mut out, d);
+    for r in &d.remainder {
+        let _ = writeln!(out, "  what is left: {}", r.sentence());
+    }
     let _ = writeln!(out, "  R2 [%] per held-out data, before -> after");
     let rows: Vec<(String, &Vec<AxisRow>)> = d
         .folds

@@ -3,6 +3,8 @@
 
 use serde::Serialize;
 
+use crate::estimate::remainder::AxisRemainder;
+
 use crate::diagnose::candidate::{EffectKind, Reading, Role};
 use crate::estimate::{AxisMetrics, EstimateError, Fit};
 use crate::model::ModelStructure;
@@ -224,6 +226,10 @@ pub struct Diagnosis {
     /// Base and final model (each fitted on all fit data) on the reporting-only
     /// validation data, when given: no decision saw these data.
     pub validation: Option<[[AxisMetrics; 6]; 2]>,
+    /// What is left in each moment axis's residual of the final model: its correlation
+    /// with the axis's rotor signals over lags (filled in by the fit pipeline on time
+    /// series; empty otherwise).
+    pub remainder: Vec<AxisRemainder>,
     /// θ̂ of the final model over `structure.params`.
     pub theta: Vec<f64>,
     /// Standard deviations of `theta` (0 for parameters dropped as unidentifiable).

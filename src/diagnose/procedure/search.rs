@@ -126,6 +126,7 @@ pub fn diagnose_on_threads(
         before_folds: fold_metrics(&base.cv),
         after_folds: fold_metrics(&current.cv),
         validation,
+        remainder: Vec::new(),
         theta: fit.mmr.theta.clone(),
         std: current.std,
         structure: current.structure,
