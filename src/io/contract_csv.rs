@@ -648,10 +648,6 @@ impl CsvSource {
 }
 
 impl RowSource for CsvSource {
-    fn file(&self) -> &str {
-        &self.file
-    }
-
     fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
         while self.row == self.current.lines.len() {
             if !self.next_range()? {

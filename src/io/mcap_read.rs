@@ -687,10 +687,6 @@ impl McapSource {
 }
 
 impl RowSource for McapSource {
-    fn file(&self) -> &str {
-        &self.file
-    }
-
     fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
         loop {
             let ready = match self.topics[self.base].queue.front() {

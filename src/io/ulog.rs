@@ -1006,10 +1006,6 @@ impl UlogSource {
 }
 
 impl RowSource for UlogSource {
-    fn file(&self) -> &str {
-        &self.file
-    }
-
     fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
         loop {
             let ready = match self.topics[self.base].queue.front() {
