@@ -4,7 +4,8 @@
 
 use serde_json::{Map, Value};
 
-use super::ros2msg::{Field, FieldType, Primitive, Schema, Shape};
+use super::ros2msg::{Field, FieldType, Schema, Shape};
+use super::scalar::Scalar;
 
 /// Largest sequence length accepted (guards against corrupt length prefixes).
 const MAX_SEQUENCE: usize = 1 << 24;
@@ -51,7 +52,7 @@ impl Cursor<'_> {
         })
     }
 
-    fn primitive(&mut self, p: Primitive) -> Result<Value, String> {
+    fn primitive(&mut self, p: Scalar) -> Result<Value, String> {
         let n = p.size();
         self.align(n);
         let little = self.little;
@@ -68,17 +69,17 @@ impl Cursor<'_> {
             }};
         }
         Ok(match p {
-            Primitive::Bool => Value::Bool(b[0] != 0),
-            Primitive::I8 => Value::from(b[0] as i8),
-            Primitive::U8 => Value::from(b[0]),
-            Primitive::I16 => Value::from(num!(i16)),
-            Primitive::U16 => Value::from(num!(u16)),
-            Primitive::I32 => Value::from(num!(i32)),
-            Primitive::U32 => Value::from(num!(u32)),
-            Primitive::I64 => Value::from(num!(i64)),
-            Primitive::U64 => Value::from(num!(u64)),
-            Primitive::F32 => number(num!(f32) as f64),
-            Primitive::F64 => number(num!(f64)),
+            Scalar::Bool => Value::Bool(b[0] != 0),
+            Scalar::I8 => Value::from(b[0] as i8),
+            Scalar::U8 => Value::from(b[0]),
+            Scalar::I16 => Value::from(num!(i16)),
+            Scalar::U16 => Value::from(num!(u16)),
+            Scalar::I32 => Value::from(num!(i32)),
+            Scalar::U32 => Value::from(num!(u32)),
+            Scalar::I64 => Value::from(num!(i64)),
+            Scalar::U64 => Value::from(num!(u64)),
+            Scalar::F32 => number(num!(f32) as f64),
+            Scalar::F64 => number(num!(f64)),
         })
     }
 }

@@ -34,6 +34,7 @@ mod open;
 mod options;
 mod reader;
 mod row_source;
+mod scalar;
 mod summary;
 
 pub use derive::DeriveOptions;

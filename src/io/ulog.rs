@@ -28,6 +28,7 @@ use std::path::Path;
 
 use super::error::{ErrorKind, IoError, Location, field, key};
 use super::mapping::{Mapping, Signal};
+use super::scalar::Scalar;
 use super::slots::SlotLayout;
 use super::units::{Dimension, unit_for};
 use super::{Dropout, RowSource};
@@ -43,85 +44,22 @@ pub const FLAG_BITS_BYTES: usize = 40;
 /// Deepest nesting of formats accepted (a cycle is an error, not a stack overflow).
 pub const MAX_NESTING: usize = 16;
 
-/// A scalar ULog type, little-endian.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Scalar {
-    /// `int8_t`.
-    I8,
-    /// `uint8_t`.
-    U8,
-    /// `int16_t`.
-    I16,
-    /// `uint16_t`.
-    U16,
-    /// `int32_t`.
-    I32,
-    /// `uint32_t`.
-    U32,
-    /// `int64_t`.
-    I64,
-    /// `uint64_t`.
-    U64,
-    /// `float`.
-    F32,
-    /// `double`.
-    F64,
-    /// `bool` (one byte).
-    Bool,
-    /// `char` (one byte).
-    Char,
-}
-
-impl Scalar {
-    /// The scalar of a ULog type name, if it is one.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Some(match name {
-            "int8_t" => Self::I8,
-            "uint8_t" => Self::U8,
-            "int16_t" => Self::I16,
-            "uint16_t" => Self::U16,
-            "int32_t" => Self::I32,
-            "uint32_t" => Self::U32,
-            "int64_t" => Self::I64,
-            "uint64_t" => Self::U64,
-            "float" => Self::F32,
-            "double" => Self::F64,
-            "bool" => Self::Bool,
-            "char" => Self::Char,
-            _ => return None,
-        })
-    }
-
-    /// Size, bytes.
-    pub fn size(self) -> usize {
-        match self {
-            Self::I8 | Self::U8 | Self::Bool | Self::Char => 1,
-            Self::I16 | Self::U16 => 2,
-            Self::I32 | Self::U32 | Self::F32 => 4,
-            Self::I64 | Self::U64 | Self::F64 => 8,
-        }
-    }
-
-    /// The value at the start of `b` (at least [`Scalar::size`] bytes) as a number.
-    fn read(self, b: &[u8]) -> f64 {
-        let a = |n: usize| -> [u8; 8] {
-            let mut out = [0u8; 8];
-            out[..n].copy_from_slice(&b[..n]);
-            out
-        };
-        match self {
-            Self::I8 => b[0] as i8 as f64,
-            Self::U8 | Self::Bool | Self::Char => b[0] as f64,
-            Self::I16 => i16::from_le_bytes([b[0], b[1]]) as f64,
-            Self::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
-            Self::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            Self::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            Self::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            Self::I64 => i64::from_le_bytes(a(8)) as f64,
-            Self::U64 => u64::from_le_bytes(a(8)) as f64,
-            Self::F64 => f64::from_le_bytes(a(8)),
-        }
-    }
+/// The scalar of a ULog type name, if it is one (`char` is a byte).
+fn scalar_named(name: &str) -> Option<Scalar> {
+    Some(match name {
+        "int8_t" => Scalar::I8,
+        "uint8_t" | "char" => Scalar::U8,
+        "int16_t" => Scalar::I16,
+        "uint16_t" => Scalar::U16,
+        "int32_t" => Scalar::I32,
+        "uint32_t" => Scalar::U32,
+        "int64_t" => Scalar::I64,
+        "uint64_t" => Scalar::U64,
+        "float" => Scalar::F32,
+        "double" => Scalar::F64,
+        "bool" => Scalar::Bool,
+        _ => return None,
+    })
 }
 
 /// One field of a format: `type[array] name`.
@@ -238,7 +176,7 @@ impl Formats {
 
     /// Size of one value of type `ty`, bytes.
     fn size_of(&self, ty: &str, depth: usize) -> Result<usize, String> {
-        if let Some(s) = Scalar::from_name(ty) {
+        if let Some(s) = scalar_named(ty) {
             return Ok(s.size());
         }
         if depth > MAX_NESTING {
@@ -317,7 +255,7 @@ impl Formats {
                 offset = offset.checked_add(k * element).ok_or("format too large")?;
                 i += 1;
             }
-            match Scalar::from_name(&f.ty) {
+            match scalar_named(&f.ty) {
                 Some(s) if i == steps.len() => return Ok((offset, s)),
                 Some(_) => {
                     return Err(format!(
@@ -981,8 +919,8 @@ impl UlogSource {
                 ),
             ));
         }
-        let t = tscalar.read(&data[*toff..]) * topic.time.1;
-        let values = fields.iter().map(|(o, s)| s.read(&data[*o..])).collect();
+        let t = tscalar.read_le(&data[*toff..]) * topic.time.1;
+        let values = fields.iter().map(|(o, s)| s.read_le(&data[*o..])).collect();
         if t.is_finite() {
             self.latest_time = self.latest_time.max(t);
         }
