@@ -139,6 +139,12 @@ fn dropout_is_reported_and_never_bridged() {
         "first sample after the dropout at {nearest_after}"
     );
     assert!(summary.dropped.values().sum::<u64>() > 10);
+    // The first sample after the last slow message before the dropout, in words.
+    assert_eq!(
+        summary.first_dropped[2],
+        "dropout.ulg: byte 20187, field \"vehicle_local_position\": no messages within \
+         align_gap = 0.3 s around t = 2.004 s (or a logger dropout between them)"
+    );
 }
 
 #[test]

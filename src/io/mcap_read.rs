@@ -12,7 +12,7 @@
 //! by the streaming linear reader, and a message more than `max_gap` earlier than one
 //! already read is an error saying the file must be indexed or sorted.
 
-use std::collections::{BTreeSet, HashMap, VecDeque};
+use std::collections::{BTreeSet, HashMap};
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -23,7 +23,7 @@ use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOp
 use mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
 use serde_json::Value;
 
-use super::RowSource;
+use super::align::{Aligner, Message, TopicSource, base_topic, topic_time};
 use super::error::{ErrorKind, IoError, Location, field};
 use super::mapping::{Mapping, Signal};
 use super::slots::SlotLayout;
@@ -137,8 +137,6 @@ struct Topic {
     name: String,
     /// (slot, path) of every mapped field of this topic.
     fields: Vec<(usize, String, Vec<Step>)>,
-    /// (time s, values in `fields` order, message index).
-    queue: VecDeque<(f64, Vec<f64>, u64)>,
     seen: bool,
 }
 
@@ -232,11 +230,8 @@ pub struct McapSource {
     topics: Vec<Topic>,
     /// Every channel topic of the file seen so far.
     file_topics: BTreeSet<String>,
-    base: usize,
-    max_gap: f64,
+    align: Aligner,
     message_index: u64,
-    latest_time: f64,
-    eof: bool,
 }
 
 impl McapSource {
@@ -272,7 +267,6 @@ impl McapSource {
                         time: None,
                         name: name.clone(),
                         fields: Vec::new(),
-                        queue: VecDeque::new(),
                         seen: false,
                     });
                     topics.len() - 1
@@ -280,23 +274,7 @@ impl McapSource {
             };
             topics[idx].fields.push((slot, field_name, steps));
         }
-        let base_name = mapping
-            .mcap
-            .time_base
-            .clone()
-            .or_else(|| mapping.signals.rates.as_ref().and_then(|r| r.topic.clone()))
-            .unwrap_or_default();
-        let base = topics
-            .iter()
-            .position(|t| t.name == base_name)
-            .ok_or_else(|| {
-                IoError::new(
-                    file,
-                    Location::File,
-                    super::error::key("mcap.time_base"),
-                    ErrorKind::Mapping(format!("time base topic {base_name:?} maps no signal")),
-                )
-            })?;
+        let base = base_topic(mapping, topics.iter().map(|t| t.name.as_str()), file)?;
         let time_field = match mapping.get(Signal::Time) {
             Some(m) if !m.fields.is_empty() => {
                 let steps = parse_path(&m.fields[0]).map_err(|e| {
@@ -312,29 +290,7 @@ impl McapSource {
             _ => None,
         };
         for topic in &mut topics {
-            topic.time = match mapping.mcap.topic_time.get(&topic.name) {
-                Some(tt) => {
-                    let bad = |m: String| {
-                        IoError::new(
-                            file,
-                            Location::File,
-                            super::error::key(&format!("mcap.topic_time.{}", topic.name)),
-                            ErrorKind::Mapping(m),
-                        )
-                    };
-                    let steps = parse_path(&tt.field).map_err(bad)?;
-                    let factor = match &tt.unit {
-                        Some(u) => {
-                            super::units::unit_for(u, None, super::units::Dimension::Time, "time")
-                                .map_err(bad)?
-                                .to_si
-                        }
-                        None => 1.0,
-                    };
-                    Some((steps, factor))
-                }
-                None => time_field.clone(),
-            };
+            topic.time = topic_time(mapping, &topic.name, file, parse_path)?.or(time_field.clone());
         }
         let read_error = |m: String| IoError::new(file, Location::File, None, ErrorKind::Read(m));
         let summary = indexed_summary(&mut handle, &topics).map_err(read_error)?;
@@ -363,6 +319,13 @@ impl McapSource {
                 LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
             ))),
         };
+        let slots = topics
+            .iter()
+            .map(|t| {
+                let slots = t.fields.iter().map(|(slot, _, _)| *slot).collect();
+                (t.name.clone(), slots)
+            })
+            .collect();
         let mut source = Self {
             file: file.to_string(),
             handle,
@@ -371,11 +334,8 @@ impl McapSource {
             schemas: HashMap::new(),
             topics,
             file_topics: BTreeSet::new(),
-            base,
-            max_gap,
+            align: Aligner::new(file, slots, base, max_gap),
             message_index: 0,
-            latest_time: f64::NEG_INFINITY,
-            eof: false,
         };
         if let Some(summary) = summary {
             for (id, schema) in &summary.schemas {
@@ -423,14 +383,6 @@ impl McapSource {
 
     fn err(&self, loc: Location, field_path: Option<String>, kind: ErrorKind) -> IoError {
         IoError::new(&self.file, loc, field_path, kind)
-    }
-
-    /// Reads the next mapped message into its topic queue; false at end of file.
-    fn read_message(&mut self) -> Result<bool, IoError> {
-        match self.order {
-            Order::LogTime { .. } => self.read_indexed(),
-            Order::File(_) => self.read_linear(),
-        }
     }
 
     fn read_error(&self, e: std::io::Error) -> IoError {
@@ -652,108 +604,61 @@ impl McapSource {
                 )
             })?);
         }
-        if t < self.latest_time - self.max_gap {
+        let (max_gap, latest) = (self.align.gap(), self.align.latest_time());
+        if t < latest - max_gap {
             let why = match self.order {
                 Order::LogTime { .. } => format!(
-                    "time t = {t} s is more than max_gap = {} s before t = {} s of a message \
+                    "time t = {t} s is more than max_gap = {max_gap} s before t = {latest} s of a message \
                      read earlier in log-time order: this topic's time field disagrees with \
-                     the message log times",
-                    self.max_gap, self.latest_time
+                     the message log times"
                 ),
                 Order::File(_) => format!(
-                    "time t = {t} s is more than max_gap = {} s before t = {} s of a message \
+                    "time t = {t} s is more than max_gap = {max_gap} s before t = {latest} s of a message \
                      earlier in the file: the messages are not stored in log-time order and \
                      the file has no chunk index to read them in order (write it with chunk \
                      indexes, as the mcap and ROS 2 writers do by default, or in log-time \
-                     order)",
-                    self.max_gap, self.latest_time
+                     order)"
                 ),
             };
             return Err(self.err(loc, field(&name), ErrorKind::Format(why)));
         }
-        if t.is_finite() {
-            self.latest_time = self.latest_time.max(t);
-        }
-        self.topics[topic].queue.push_back((t, values, index));
+        let message = Message {
+            t,
+            values,
+            loc,
+            epoch: 0,
+        };
+        self.align.push(topic, message);
         Ok(())
-    }
-
-    /// True when topic `j` can no longer get a message that brackets base time `tb`.
-    fn settled(&self, j: usize, tb: f64) -> bool {
-        self.eof
-            || self.topics[j].queue.back().is_some_and(|m| m.0 >= tb)
-            || self.latest_time > tb + self.max_gap
     }
 }
 
-impl RowSource for McapSource {
-    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
-        loop {
-            let ready = match self.topics[self.base].queue.front() {
-                Some(&(tb, _, _)) => {
-                    (0..self.topics.len()).all(|j| j == self.base || self.settled(j, tb))
-                }
-                None => self.eof,
-            };
-            if !ready {
-                if !self.read_message()? {
-                    self.eof = true;
-                    if let Some(t) = self.topics.iter().find(|t| !t.seen) {
-                        let has = if self.file_topics.is_empty() {
-                            "the file has no channels".to_string()
-                        } else {
-                            let names: Vec<&str> =
-                                self.file_topics.iter().map(String::as_str).collect();
-                            format!("topics in the file: {}", names.join(", "))
-                        };
-                        return Err(self.err(
-                            Location::File,
-                            field(&t.name),
-                            ErrorKind::MissingSignal(format!("topic not in the file ({has})")),
-                        ));
-                    }
-                }
-                continue;
-            }
-            let Some((tb, values, index)) = self.topics[self.base].queue.pop_front() else {
-                return Ok(None);
-            };
-            let loc = Location::Record(index);
-            for ((slot, _, _), v) in self.topics[self.base].fields.iter().zip(&values) {
-                raw[*slot] = *v;
-            }
-            for j in 0..self.topics.len() {
-                if j == self.base {
-                    continue;
-                }
-                let max_gap = self.max_gap;
-                let topic = &mut self.topics[j];
-                while topic.queue.len() >= 2 && topic.queue[1].0 <= tb {
-                    topic.queue.pop_front();
-                }
-                let aligned = match (topic.queue.front(), topic.queue.get(1)) {
-                    (Some(a), _) if a.0 == tb => Some(a.1.clone()),
-                    (Some(a), Some(b)) if a.0 < tb && b.0 > tb && b.0 - a.0 <= max_gap => {
-                        let w = (tb - a.0) / (b.0 - a.0);
-                        Some(a.1.iter().zip(&b.1).map(|(x, y)| x + w * (y - x)).collect())
-                    }
-                    _ => None,
-                };
-                let Some(vals) = aligned else {
-                    let name = topic.name.clone();
-                    return Err(self.err(
-                        loc,
-                        field(&name),
-                        ErrorKind::NotAligned(format!(
-                            "no messages within max_gap = {max_gap} s around t = {tb} s"
-                        )),
-                    ));
-                };
-                for ((slot, _, _), v) in topic.fields.iter().zip(vals) {
-                    raw[*slot] = v;
-                }
-            }
-            return Ok(Some((loc, Some(tb))));
+impl TopicSource for McapSource {
+    const GAP_WORDS: (&'static str, &'static str) = ("max_gap", "");
+
+    fn aligner(&mut self) -> &mut Aligner {
+        &mut self.align
+    }
+
+    fn read_message(&mut self) -> Result<bool, IoError> {
+        match self.order {
+            Order::LogTime { .. } => self.read_indexed(),
+            Order::File(_) => self.read_linear(),
         }
+    }
+
+    fn missing_topic(&self) -> Option<IoError> {
+        let t = self.topics.iter().find(|t| !t.seen)?;
+        let has = if self.file_topics.is_empty() {
+            "the file has no channels".to_string()
+        } else {
+            let names: Vec<&str> = self.file_topics.iter().map(String::as_str).collect();
+            format!("topics in the file: {}", names.join(", "))
+        };
+        Some(self.err(
+            Location::File,
+            field(&t.name),
+            ErrorKind::MissingSignal(format!("topic not in the file ({has})")),
+        ))
     }
 }

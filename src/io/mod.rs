@@ -30,6 +30,7 @@ pub mod ulog_write;
 pub mod units;
 pub mod validate;
 
+mod align;
 mod open;
 mod options;
 mod reader;

@@ -21,17 +21,17 @@
 //!
 //! Errors name the file, the byte offset of the message, its type and the field.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap, VecDeque};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::Path;
 
+use super::Dropout;
+use super::align::{Aligner, Message, TopicSource, base_topic, topic_time};
 use super::error::{ErrorKind, IoError, Location, field, key};
 use super::mapping::{Mapping, Signal};
 use super::scalar::Scalar;
 use super::slots::SlotLayout;
-use super::units::{Dimension, unit_for};
-use super::{Dropout, RowSource};
 
 /// The seven magic bytes a ULog file starts with.
 pub const MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];
@@ -564,16 +564,6 @@ pub fn read_definitions(path: &Path) -> Result<LogDefinitions, IoError> {
     Ok(defs)
 }
 
-/// One logged message of a mapped topic, waiting for alignment.
-struct Queued {
-    t: f64,
-    values: Vec<f64>,
-    offset: u64,
-    /// Dropouts seen before this message: messages of different epochs are never
-    /// interpolated between.
-    epoch: u32,
-}
-
 /// Where a mapped topic's time and fields sit in its data messages.
 struct Located {
     /// Byte offset and type of the time field.
@@ -596,7 +586,6 @@ struct Topic {
     time: (String, f64),
     /// Time and fields located in the topic's format, once subscribed.
     located: Option<Located>,
-    queue: VecDeque<Queued>,
     seen: bool,
     /// Data messages read.
     messages: u64,
@@ -613,15 +602,11 @@ pub struct UlogSource {
     /// `D` data messages read, of any topic.
     data_messages: u64,
     topics: Vec<Topic>,
-    base: usize,
-    align_gap: f64,
-    latest_time: f64,
+    align: Aligner,
+    /// Dropouts read so far: the epoch of the messages read now.
     epoch: u32,
-    last_base_epoch: Option<u32>,
-    segment_break: bool,
     dropouts: Vec<Dropout>,
     first_message: bool,
-    eof: bool,
 }
 
 impl UlogSource {
@@ -659,22 +644,9 @@ impl UlogSource {
                     let (name, instance) = split_instance(&topic_key).map_err(|m| {
                         mapping_err(&format!("signals.{}", layout.signal_of_slot(slot).key()), m)
                     })?;
-                    let time = match mapping.mcap.topic_time.get(&topic_key) {
-                        Some(tt) => {
-                            let k = format!("mcap.topic_time.{topic_key}");
-                            parse_path(&tt.field).map_err(|m| mapping_err(&k, m))?;
-                            let factor = match &tt.unit {
-                                Some(u) => {
-                                    unit_for(u, None, Dimension::Time, "time")
-                                        .map_err(|m| mapping_err(&k, m))?
-                                        .to_si
-                                }
-                                None => 1.0,
-                            };
-                            (tt.field.clone(), factor)
-                        }
-                        None => default_time.clone(),
-                    };
+                    let check = |path: &str| parse_path(path).map(|_| path.to_string());
+                    let time = topic_time(mapping, &topic_key, file, check)?
+                        .unwrap_or_else(|| default_time.clone());
                     topics.push(Topic {
                         key: topic_key.clone(),
                         name: name.to_string(),
@@ -682,7 +654,6 @@ impl UlogSource {
                         fields: Vec::new(),
                         time,
                         located: None,
-                        queue: VecDeque::new(),
                         seen: false,
                         messages: 0,
                     });
@@ -691,22 +662,17 @@ impl UlogSource {
             };
             topics[idx].fields.push((slot, path));
         }
-        let base_name = mapping
-            .mcap
-            .time_base
-            .clone()
-            .or_else(|| mapping.signals.rates.as_ref().and_then(|r| r.topic.clone()))
-            .unwrap_or_default();
-        let base = topics
-            .iter()
-            .position(|t| t.key == base_name)
-            .ok_or_else(|| {
-                mapping_err(
-                    "mcap.time_base",
-                    format!("time base topic {base_name:?} maps no signal"),
-                )
-            })?;
+        let base = base_topic(mapping, topics.iter().map(|t| t.key.as_str()), file)?;
         let (reader, _) = MessageReader::open(path, file)?;
+        let slots = topics
+            .iter()
+            .map(|t| {
+                (
+                    t.key.clone(),
+                    t.fields.iter().map(|(slot, _)| *slot).collect(),
+                )
+            })
+            .collect();
         let source = Self {
             file: file.to_string(),
             reader,
@@ -715,15 +681,10 @@ impl UlogSource {
             logged: BTreeSet::new(),
             data_messages: 0,
             topics,
-            base,
-            align_gap,
-            latest_time: f64::NEG_INFINITY,
+            align: Aligner::new(file, slots, base, align_gap),
             epoch: 0,
-            last_base_epoch: None,
-            segment_break: false,
             dropouts: Vec::new(),
             first_message: true,
-            eof: false,
         };
         Ok((source, layout))
     }
@@ -735,68 +696,6 @@ impl UlogSource {
             field_label,
             ErrorKind::Format(text),
         )
-    }
-
-    /// Reads messages until one of a mapped topic is queued; false at end of file.
-    fn read_message(&mut self) -> Result<bool, IoError> {
-        while let Some(offset) = self.reader.next_message()? {
-            let kind = self.reader.kind;
-            if std::mem::take(&mut self.first_message) && kind == b'B' {
-                self.reader.flag_bits(offset)?;
-                continue;
-            }
-            match kind {
-                b'B' => {
-                    return Err(self.err(
-                        offset,
-                        None,
-                        "'B' flag-bits message after the first message".into(),
-                    ));
-                }
-                b'F' => {
-                    let text = std::str::from_utf8(&self.reader.buf).map_err(|_| {
-                        self.err(offset, None, "'F' format message is not UTF-8 text".into())
-                    })?;
-                    let (name, fields) = parse_format(text)
-                        .map_err(|m| self.err(offset, None, format!("'F' format message: {m}")))?;
-                    self.formats.insert(name, fields);
-                }
-                b'A' => self.subscribe(offset)?,
-                b'R' => {
-                    let b = &self.reader.buf;
-                    if b.len() < 2 {
-                        return Err(self.err(
-                            offset,
-                            None,
-                            format!("'R' message has {} bytes, 2 expected", b.len()),
-                        ));
-                    }
-                    self.subscriptions.remove(&u16::from_le_bytes([b[0], b[1]]));
-                }
-                b'D' if self.data(offset)? => return Ok(true),
-                b'O' => {
-                    let b = &self.reader.buf;
-                    if b.len() < 2 {
-                        return Err(self.err(
-                            offset,
-                            None,
-                            format!("'O' dropout message has {} bytes, 2 expected", b.len()),
-                        ));
-                    }
-                    let ms = u16::from_le_bytes([b[0], b[1]]);
-                    self.epoch += 1;
-                    if self.dropouts.len() < 1000 {
-                        self.dropouts.push(Dropout {
-                            offset,
-                            after: self.latest_time,
-                            duration: ms as f64 * 1e-3,
-                        });
-                    }
-                }
-                _ => {}
-            }
-        }
-        Ok(false)
     }
 
     /// An `A` message: msg id → topic instance, locating the mapped fields.
@@ -921,126 +820,111 @@ impl UlogSource {
         }
         let t = tscalar.read_le(&data[*toff..]) * topic.time.1;
         let values = fields.iter().map(|(o, s)| s.read_le(&data[*o..])).collect();
-        if t.is_finite() {
-            self.latest_time = self.latest_time.max(t);
-        }
-        let epoch = self.epoch;
         self.topics[j].messages += 1;
-        self.topics[j].queue.push_back(Queued {
+        let message = Message {
             t,
             values,
-            offset,
-            epoch,
-        });
+            loc: Location::Offset(offset),
+            epoch: self.epoch,
+        };
+        self.align.push(j, message);
         Ok(true)
-    }
-
-    /// True when topic `j` can no longer get a message that brackets base time `tb`.
-    fn settled(&self, j: usize, tb: f64) -> bool {
-        self.eof
-            || self.topics[j].queue.back().is_some_and(|m| m.t >= tb)
-            || self.latest_time > tb + self.align_gap
     }
 }
 
-impl RowSource for UlogSource {
-    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
-        loop {
-            let ready = match self.topics[self.base].queue.front() {
-                Some(m) => {
-                    let tb = m.t;
-                    (0..self.topics.len()).all(|j| j == self.base || self.settled(j, tb))
-                }
-                None => self.eof,
-            };
-            if !ready {
-                if !self.read_message()? {
-                    self.eof = true;
-                    if let Some(t) = self.topics.iter().find(|t| t.messages == 0) {
-                        let logged: Vec<&str> = self.logged.iter().map(String::as_str).collect();
-                        let text = if self.data_messages == 0 {
-                            let subscribed = if logged.is_empty() {
-                                "no topic is subscribed".to_string()
-                            } else {
-                                format!("subscribed topics: {}", logged.join(", "))
-                            };
-                            format!("the log has no data messages ({subscribed})")
-                        } else if t.seen {
-                            "topic is subscribed but has no data messages in the log".to_string()
-                        } else {
-                            format!(
-                                "topic not in the log (logged topics: {})",
-                                logged.join(", ")
-                            )
-                        };
-                        return Err(IoError::new(
-                            &self.file,
-                            Location::File,
-                            field(&t.key),
-                            ErrorKind::MissingSignal(text),
-                        ));
-                    }
-                }
-                continue;
-            }
-            let Some(m) = self.topics[self.base].queue.pop_front() else {
-                return Ok(None);
-            };
-            if self.last_base_epoch.is_some_and(|e| e != m.epoch) {
-                self.segment_break = true;
-            }
-            self.last_base_epoch = Some(m.epoch);
-            let loc = Location::Offset(m.offset);
-            for ((slot, _), v) in self.topics[self.base].fields.iter().zip(&m.values) {
-                raw[*slot] = *v;
-            }
-            let tb = m.t;
-            for j in 0..self.topics.len() {
-                if j == self.base {
-                    continue;
-                }
-                let gap = self.align_gap;
-                let topic = &mut self.topics[j];
-                while topic.queue.len() >= 2 && topic.queue[1].t <= tb {
-                    topic.queue.pop_front();
-                }
-                let slots = topic.fields.iter().map(|(s, _)| *s);
-                let aligned = match (topic.queue.front(), topic.queue.get(1)) {
-                    (Some(a), _) if a.t == tb => {
-                        for (s, v) in slots.zip(&a.values) {
-                            raw[s] = *v;
-                        }
-                        true
-                    }
-                    (Some(a), Some(b))
-                        if a.t < tb && b.t > tb && b.t - a.t <= gap && a.epoch == b.epoch =>
-                    {
-                        let w = (tb - a.t) / (b.t - a.t);
-                        for (s, (x, y)) in slots.zip(a.values.iter().zip(&b.values)) {
-                            raw[s] = x + w * (y - x);
-                        }
-                        true
-                    }
-                    _ => false,
-                };
-                if !aligned {
-                    let key = topic.key.clone();
-                    return Err(IoError::new(
-                        &self.file,
-                        loc,
-                        field(&key),
-                        ErrorKind::NotAligned(format!(
-                            "no messages within align_gap = {gap} s around t = {tb} s (or a logger dropout between them)"
-                        )),
-                    ));
-                }
-            }
-            return Ok(Some((loc, Some(tb))));
-        }
+impl TopicSource for UlogSource {
+    const GAP_WORDS: (&'static str, &'static str) =
+        ("align_gap", " (or a logger dropout between them)");
+
+    fn aligner(&mut self) -> &mut Aligner {
+        &mut self.align
     }
 
-    fn take_segment_break(&mut self) -> bool {
-        std::mem::take(&mut self.segment_break)
+    fn read_message(&mut self) -> Result<bool, IoError> {
+        while let Some(offset) = self.reader.next_message()? {
+            let kind = self.reader.kind;
+            if std::mem::take(&mut self.first_message) && kind == b'B' {
+                self.reader.flag_bits(offset)?;
+                continue;
+            }
+            match kind {
+                b'B' => {
+                    return Err(self.err(
+                        offset,
+                        None,
+                        "'B' flag-bits message after the first message".into(),
+                    ));
+                }
+                b'F' => {
+                    let text = std::str::from_utf8(&self.reader.buf).map_err(|_| {
+                        self.err(offset, None, "'F' format message is not UTF-8 text".into())
+                    })?;
+                    let (name, fields) = parse_format(text)
+                        .map_err(|m| self.err(offset, None, format!("'F' format message: {m}")))?;
+                    self.formats.insert(name, fields);
+                }
+                b'A' => self.subscribe(offset)?,
+                b'R' => {
+                    let b = &self.reader.buf;
+                    if b.len() < 2 {
+                        return Err(self.err(
+                            offset,
+                            None,
+                            format!("'R' message has {} bytes, 2 expected", b.len()),
+                        ));
+                    }
+                    self.subscriptions.remove(&u16::from_le_bytes([b[0], b[1]]));
+                }
+                b'D' if self.data(offset)? => return Ok(true),
+                b'O' => {
+                    let b = &self.reader.buf;
+                    if b.len() < 2 {
+                        return Err(self.err(
+                            offset,
+                            None,
+                            format!("'O' dropout message has {} bytes, 2 expected", b.len()),
+                        ));
+                    }
+                    let ms = u16::from_le_bytes([b[0], b[1]]);
+                    self.epoch += 1;
+                    if self.dropouts.len() < 1000 {
+                        self.dropouts.push(Dropout {
+                            offset,
+                            after: self.align.latest_time(),
+                            duration: ms as f64 * 1e-3,
+                        });
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(false)
+    }
+
+    fn missing_topic(&self) -> Option<IoError> {
+        let t = self.topics.iter().find(|t| t.messages == 0)?;
+        let logged: Vec<&str> = self.logged.iter().map(String::as_str).collect();
+        let text = if self.data_messages == 0 {
+            let subscribed = if logged.is_empty() {
+                "no topic is subscribed".to_string()
+            } else {
+                format!("subscribed topics: {}", logged.join(", "))
+            };
+            format!("the log has no data messages ({subscribed})")
+        } else if t.seen {
+            "topic is subscribed but has no data messages in the log".to_string()
+        } else {
+            format!(
+                "topic not in the log (logged topics: {})",
+                logged.join(", ")
+            )
+        };
+        Some(IoError::new(
+            &self.file,
+            Location::File,
+            field(&t.key),
+            ErrorKind::MissingSignal(text),
+        ))
     }
 
     fn dropouts(&self) -> &[Dropout] {
