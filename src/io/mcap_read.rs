@@ -25,6 +25,7 @@ use serde_json::Value;
 
 use super::align::{Aligner, Message, TopicSource, base_topic, topic_time};
 use super::error::{ErrorKind, IoError, Location, field};
+use super::field_path::{self, Step, Style};
 use super::mapping::{Mapping, Signal};
 use super::slots::SlotLayout;
 
@@ -32,39 +33,9 @@ use super::slots::SlotLayout;
 /// not an allocation of that size.
 pub const MAX_RECORD_BYTES: usize = 256 << 20;
 
-/// One step of a field path: `key` or `[index]`.
-#[derive(Debug, Clone, PartialEq)]
-enum Step {
-    Key(String),
-    Index(usize),
-}
-
-/// Parses `a.b[2].c`.
+/// Parses a JSON field path `a.b[2].c`.
 fn parse_path(path: &str) -> Result<Vec<Step>, String> {
-    let mut steps = Vec::new();
-    for part in path.split('.') {
-        let (key, mut rest) = part.split_once('[').map_or((part, ""), |(k, r)| (k, r));
-        if key.is_empty() && steps.is_empty() && rest.is_empty() {
-            return Err(format!("empty field path {path:?}"));
-        }
-        if !key.is_empty() {
-            steps.push(Step::Key(key.to_string()));
-        }
-        while !rest.is_empty() {
-            let (idx, after) = rest
-                .split_once(']')
-                .ok_or_else(|| format!("unclosed '[' in {path:?}"))?;
-            let i = idx
-                .parse()
-                .map_err(|_| format!("bad index {idx:?} in {path:?}"))?;
-            steps.push(Step::Index(i));
-            rest = after.strip_prefix('[').unwrap_or(after);
-            if !after.is_empty() && !after.starts_with('[') {
-                return Err(format!("unexpected {after:?} in {path:?}"));
-            }
-        }
-    }
-    Ok(steps)
+    field_path::parse(path, Style::Json)
 }
 
 fn lookup<'v>(value: &'v Value, steps: &[Step]) -> Option<&'v Value> {

@@ -31,6 +31,7 @@ pub mod units;
 pub mod validate;
 
 mod align;
+mod field_path;
 mod open;
 mod options;
 mod reader;

@@ -29,6 +29,7 @@ use std::path::Path;
 use super::Dropout;
 use super::align::{Aligner, Message, TopicSource, base_topic, topic_time};
 use super::error::{ErrorKind, IoError, Location, field, key};
+use super::field_path::{self, Step, Style};
 use super::mapping::{Mapping, Signal};
 use super::scalar::Scalar;
 use super::slots::SlotLayout;
@@ -112,38 +113,9 @@ pub fn parse_format(text: &str) -> Result<(String, Vec<FieldDef>), String> {
     Ok((name.to_string(), fields))
 }
 
-/// One step of a field path.
-#[derive(Debug, Clone, PartialEq)]
-enum Step {
-    Key(String),
-    Index(usize),
-}
-
-/// Parses `a.b[2].c` into steps.
+/// Parses a ULog field path `a.b[2].c`.
 fn parse_path(path: &str) -> Result<Vec<Step>, String> {
-    let mut steps = Vec::new();
-    for part in path.split('.') {
-        let (name, mut rest) = part.split_once('[').unwrap_or((part, ""));
-        if name.is_empty() {
-            return Err(format!("empty name in field path {path:?}"));
-        }
-        steps.push(Step::Key(name.to_string()));
-        while !rest.is_empty() {
-            let (idx, after) = rest
-                .split_once(']')
-                .ok_or_else(|| format!("unclosed '[' in field path {path:?}"))?;
-            let i = idx
-                .parse()
-                .map_err(|_| format!("bad index {idx:?} in field path {path:?}"))?;
-            steps.push(Step::Index(i));
-            rest = match after.strip_prefix('[') {
-                Some(r) => r,
-                None if after.is_empty() => "",
-                None => return Err(format!("unexpected {after:?} in field path {path:?}")),
-            };
-        }
-    }
-    Ok(steps)
+    field_path::parse(path, Style::Ulog)
 }
 
 /// Splits a mapped topic `name[k]` into name and multi-instance id (0 when absent).
