@@ -1,6 +1,5 @@
 //! ROS 2 CDR (XCDR1, little or big endian) decoding into a JSON value, driven by a
-//! [`Schema`], so the same field paths address JSON and CDR messages. And a minimal
-//! little-endian encoder for the writer.
+//! [`Schema`], so the same field paths address JSON and CDR messages.
 
 use serde_json::{Map, Value};
 
@@ -161,45 +160,6 @@ fn decode_one(
             Ok(Value::String(String::from_utf8_lossy(s).into_owned()))
         }
         FieldType::Message(m) => decode_message(schema, m, c, depth + 1),
-    }
-}
-
-/// Little-endian CDR encoder of float64 scalars and sequences (what the writer needs).
-#[derive(Debug, Default)]
-pub struct Encoder {
-    buf: Vec<u8>,
-}
-
-impl Encoder {
-    /// A message with the CDR_LE encapsulation header.
-    pub fn new() -> Self {
-        Self {
-            buf: vec![0, 1, 0, 0],
-        }
-    }
-
-    fn align(&mut self, n: usize) {
-        while !(self.buf.len() - 4).is_multiple_of(n) {
-            self.buf.push(0);
-        }
-    }
-
-    /// Appends a float64.
-    pub fn f64(&mut self, x: f64) {
-        self.align(8);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-    }
-
-    /// Appends a float64 sequence (`float64[]`).
-    pub fn f64_seq(&mut self, xs: &[f64]) {
-        self.align(4);
-        self.buf.extend_from_slice(&(xs.len() as u32).to_le_bytes());
-        xs.iter().for_each(|&x| self.f64(x));
-    }
-
-    /// The encoded bytes.
-    pub fn finish(self) -> Vec<u8> {
-        self.buf
     }
 }
 

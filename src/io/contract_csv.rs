@@ -16,7 +16,6 @@
 //! read) exist at any time, their buffers reused.
 
 use std::collections::VecDeque;
-use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
@@ -704,62 +703,6 @@ fn parse_text(text: &str) -> Result<f64, String> {
         text.parse::<f64>()
     };
     parsed.map_err(|_| text.to_string())
-}
-
-/// Writes samples as a contract CSV (`docs/data-contract.md`; header
-/// `t,u,v,w,p,q,r,omega_1..N,[omega_dot_1..N,]fx,fy,fz,mx,my,mz[,height][,qw,qx,qy,qz]`),
-/// shortest round-trip float formatting so reading back gives identical values.
-pub fn write_contract_csv<'a>(
-    path: &Path,
-    chunks: impl IntoIterator<Item = &'a crate::sample::SampleChunk>,
-) -> std::io::Result<()> {
-    use std::io::Write;
-    let mut out = std::io::BufWriter::new(File::create(path)?);
-    let mut header_written = false;
-    let mut line = String::new();
-    for c in chunks {
-        if !header_written {
-            let mut h = String::from("t,u,v,w,p,q,r");
-            for i in 1..=c.rotor_count() {
-                h += &format!(",omega_{i}");
-            }
-            for i in 1..=c.omega_dot.len() {
-                h += &format!(",omega_dot_{i}");
-            }
-            h += ",fx,fy,fz,mx,my,mz";
-            if c.has_height() {
-                h += ",height";
-            }
-            if c.has_attitude() {
-                h += ",qw,qx,qy,qz";
-            }
-            writeln!(out, "{h}")?;
-            header_written = true;
-        }
-        for k in 0..c.len() {
-            line.clear();
-            let mut put = |v: f64| {
-                if !line.is_empty() {
-                    line.push(',');
-                }
-                line.push_str(&format!("{v:?}"));
-            };
-            put(c.t[k]);
-            c.velocity.iter().for_each(|v| put(v[k]));
-            c.rates.iter().for_each(|v| put(v[k]));
-            c.omega.iter().for_each(|v| put(v[k]));
-            c.omega_dot.iter().for_each(|v| put(v[k]));
-            c.wrench.iter().for_each(|v| put(v[k]));
-            if c.has_height() {
-                put(c.height[k]);
-            }
-            if c.has_attitude() {
-                c.attitude.iter().for_each(|v| put(v[k]));
-            }
-            writeln!(out, "{line}")?;
-        }
-    }
-    out.flush()
 }
 
 #[cfg(test)]

@@ -21,17 +21,17 @@ pub mod json_error;
 pub mod layout;
 pub mod mapping;
 pub mod mcap_read;
-pub mod mcap_write;
 pub mod px4;
 pub mod ros2msg;
 pub mod slots;
 pub mod ulog;
-pub mod ulog_write;
 pub mod units;
 pub mod validate;
 
 mod align;
 mod field_path;
+#[cfg(feature = "fixtures")]
+pub mod fixtures;
 mod open;
 mod options;
 mod reader;
