@@ -29,8 +29,9 @@ use crate::estimate::{
     ResidualDiagnostics, ResidualPass,
 };
 use crate::identified::IdentifiedModel;
-use crate::io::derive::{JerkScratch, rotor_jerk};
-use crate::io::{self, DeriveOptions, LogReader, Mapping, ReadOptions, Summary};
+use crate::io::{
+    self, DeriveOptions, JerkScratch, LogReader, Mapping, ReadOptions, Summary, rotor_jerk,
+};
 use crate::model::{ModelStructure, Reuse, Workspace};
 use crate::sample::{CHUNK_SAMPLES, SampleChunk, Signals};
 use crate::slow::SlowThrust;
@@ -754,7 +755,7 @@ fn no_holdout(req: &FitRequest, log: &LogStats) -> Error {
     };
     let samples = log.fit.count() + log.held_out.count();
     let consequence = ", so no sample falls in a held-out segment";
-    if let Some(text) = io::validate::time_unit_suspect(median_step, span, samples, consequence) {
+    if let Some(text) = io::time_unit_suspect(median_step, span, samples, consequence) {
         return io::IoError::new(
             &s.file,
             io::Location::File,

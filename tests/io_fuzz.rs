@@ -14,13 +14,11 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use io_support::{Px4Log, analytic_chunk, px4_like_log, quad};
-use mrsysid::io::cdr::decode;
 use mrsysid::io::fixtures;
 use mrsysid::io::fixtures::mcap::{Encoding, write_samples, written_mapping};
 use mrsysid::io::fixtures::write_contract_csv;
-use mrsysid::io::ros2msg::parse_schema;
-use mrsysid::io::ulog::read_definitions;
-use mrsysid::io::{InvalidSamples, Mapping, ReadOptions, open_log};
+use mrsysid::io::internals::{decode_cdr as decode, parse_ros2_schema as parse_schema};
+use mrsysid::io::{InvalidSamples, Mapping, ReadOptions, open_log, read_definitions};
 use mrsysid::vehicle::{Vehicle, VehicleSource};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};

@@ -12,8 +12,7 @@ use io_support::{
     Px4Log, analytic_chunk, concat, px4_gyro, px4_like_log, px4_pwm, px4_rpm, px4_velocity, quad,
 };
 use mrsysid::io::fixtures::ulog::{UlogWriter, write_samples, written_mapping};
-use mrsysid::io::ulog::read_definitions;
-use mrsysid::io::{IoError, Mapping, ReadOptions, Summary, open_log};
+use mrsysid::io::{IoError, Mapping, ReadOptions, Summary, open_log, read_definitions};
 use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::Vehicle;
 
@@ -198,8 +197,8 @@ fn vehicle_skeleton_from_ca_parameters() {
     let defs = read_definitions(&path).unwrap();
     assert_eq!(defs.parameters["CA_ROTOR_COUNT"], 4.0);
     assert_eq!(defs.info["ver_hw"], "TEST_BOARD");
-    let rotors = mrsysid::io::px4::rotors_from_parameters(&defs.parameters).unwrap();
-    let text = mrsysid::io::px4::vehicle_skeleton(&rotors, "PX4", "params.ulg");
+    let rotors = mrsysid::io::rotors_from_parameters(&defs.parameters).unwrap();
+    let text = mrsysid::io::vehicle_skeleton(&rotors, "PX4", "params.ulg");
     let filled = text
         .replace("# mass = 1.5", "mass = 1.5")
         .replace("# inertia", "inertia")

@@ -80,7 +80,7 @@ impl AxisMap {
 
 impl BodyFrame {
     /// Map from this frame's components to FRD components.
-    pub fn to_frd(self) -> AxisMap {
+    pub(crate) fn to_frd(self) -> AxisMap {
         match self {
             Self::Frd => AxisMap {
                 perm: [0, 1, 2],
@@ -96,7 +96,7 @@ impl BodyFrame {
 
 impl WorldFrame {
     /// Map from this frame's components to NED components.
-    pub fn to_ned(self) -> AxisMap {
+    pub(crate) fn to_ned(self) -> AxisMap {
         match self {
             Self::Ned => AxisMap {
                 perm: [0, 1, 2],
@@ -140,7 +140,7 @@ pub struct SignalMap {
     /// `esc[2].esc_rpm`), one per component.
     #[serde(default)]
     pub fields: Vec<String>,
-    /// Unit of the logged values (see [`super::units::parse_unit`]); SI when absent.
+    /// Unit of the logged values (the names of `docs/mapping.md`); SI when absent.
     pub unit: Option<String>,
     /// Motor pole pairs, for unit `erpm`.
     pub pole_pairs: Option<f64>,
@@ -175,7 +175,7 @@ pub struct ActuatorMap {
 
 impl ActuatorMap {
     /// Checks the ranges; the message names the offending key.
-    pub fn check(&self) -> Result<(), String> {
+    pub(crate) fn check(&self) -> Result<(), String> {
         match (self.pwm_min, self.pwm_max) {
             (Some(lo), Some(hi)) if lo.is_finite() && hi.is_finite() && lo < hi => {}
             (None, None) => {}
@@ -208,7 +208,7 @@ impl ActuatorMap {
     }
 
     /// Commanded rotor speed of actuator output `x`, in the signal's unit.
-    pub fn speed(&self, x: f64) -> f64 {
+    pub(crate) fn speed(&self, x: f64) -> f64 {
         let u = match (self.pwm_min, self.pwm_max) {
             (Some(lo), Some(hi)) => (x - lo) / (hi - lo),
             _ => x,
@@ -219,7 +219,7 @@ impl ActuatorMap {
     }
 
     /// In words, for the reader's summary.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let range = match (self.pwm_min, self.pwm_max) {
             (Some(lo), Some(hi)) => format!("PWM {lo}..{hi}"),
             _ => "normalised 0..1".into(),
@@ -440,7 +440,7 @@ impl Mapping {
     }
 
     /// The location of `signal`, if mapped.
-    pub fn get(&self, signal: Signal) -> Option<&SignalMap> {
+    pub(crate) fn get(&self, signal: Signal) -> Option<&SignalMap> {
         let s = &self.signals;
         match signal {
             Signal::Time => self.time.as_ref(),
@@ -477,7 +477,7 @@ impl Mapping {
     }
 
     /// Sets the columns of `signal` (SI units).
-    pub fn set_columns(&mut self, signal: Signal, columns: Vec<String>) {
+    pub(crate) fn set_columns(&mut self, signal: Signal, columns: Vec<String>) {
         *self.slot(signal) = Some(SignalMap {
             columns,
             ..SignalMap::default()
@@ -485,7 +485,7 @@ impl Mapping {
     }
 
     /// Conversion factor to SI of `signal`'s unit (1 when no unit is given).
-    pub fn factor(&self, signal: Signal) -> f64 {
+    pub(crate) fn factor(&self, signal: Signal) -> f64 {
         self.get(signal)
             .and_then(|m| {
                 m.unit
