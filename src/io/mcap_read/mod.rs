@@ -14,81 +14,27 @@
 
 use std::collections::{BTreeSet, HashMap};
 use std::fs::File;
-use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
-use mcap::records::{MessageHeader, Record};
-use mcap::sans_io::indexed_reader::{IndexedReadEvent, IndexedReader, IndexedReaderOptions};
-use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
-use mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
+use mcap::records::MessageHeader;
+use mcap::sans_io::indexed_reader::{IndexedReader, IndexedReaderOptions};
+use mcap::sans_io::linear_reader::{LinearReader, LinearReaderOptions};
 use serde_json::Value;
 
 use super::align::{Aligner, Message, TopicSource, base_topic, topic_time};
 use super::error::{ErrorKind, IoError, Location, field};
-use super::field_path::{self, Step, Style};
+use super::field_path::Step;
 use super::mapping::{Mapping, Signal};
 use super::slots::SlotLayout;
+use json::{as_number, lookup, parse_path, what_is_there};
+use order::{Order, check_start, indexed_summary};
+
+mod json;
+mod order;
 
 /// Largest MCAP record (or chunk) accepted, bytes: a corrupt length field is an error,
 /// not an allocation of that size.
 pub const MAX_RECORD_BYTES: usize = 256 << 20;
-
-/// Parses a JSON field path `a.b[2].c`.
-fn parse_path(path: &str) -> Result<Vec<Step>, String> {
-    field_path::parse(path, Style::Json)
-}
-
-fn lookup<'v>(value: &'v Value, steps: &[Step]) -> Option<&'v Value> {
-    steps.iter().try_fold(value, |v, s| match s {
-        Step::Key(k) => v.get(k),
-        Step::Index(i) => v.get(*i),
-    })
-}
-
-/// What `value` has where the path `steps` leaves it, e.g. `gyro has 3 elements`, `the
-/// message has fields f, gyro, vel`; empty when the path is in it.
-fn what_is_there(value: &Value, steps: &[Step]) -> String {
-    let mut v = value;
-    let mut path = String::new();
-    for step in steps {
-        let next = match step {
-            Step::Key(k) => v.get(k),
-            Step::Index(i) => v.get(*i),
-        };
-        let Some(next) = next else {
-            let here = if path.is_empty() {
-                "the message".to_string()
-            } else {
-                path
-            };
-            return match v {
-                Value::Object(map) => {
-                    let keys: Vec<&str> = map.keys().map(String::as_str).collect();
-                    format!("{here} has fields {}", keys.join(", "))
-                }
-                Value::Array(items) => format!("{here} has {} elements", items.len()),
-                other => format!("{here} is {other}, not an object or array"),
-            };
-        };
-        match step {
-            Step::Key(k) if path.is_empty() => path = k.clone(),
-            Step::Key(k) => path = format!("{path}.{k}"),
-            Step::Index(i) => path = format!("{path}[{i}]"),
-        }
-        v = next;
-    }
-    String::new()
-}
-
-/// A number, or a ROS time `{sec, nanosec}` / `{secs, nsecs}` in seconds.
-fn as_number(v: &Value) -> Option<f64> {
-    if let Some(x) = v.as_f64() {
-        return Some(x);
-    }
-    let sec = v.get("sec").or_else(|| v.get("secs"))?.as_f64()?;
-    let ns = v.get("nanosec").or_else(|| v.get("nsecs"))?.as_f64()?;
-    Some(sec + ns * 1e-9)
-}
 
 /// How a topic's messages are decoded.
 enum Decoder {
@@ -109,85 +55,6 @@ struct Topic {
     /// (slot, path) of every mapped field of this topic.
     fields: Vec<(usize, String, Vec<Step>)>,
     seen: bool,
-}
-
-/// How messages are read: log-time order through chunk indexes, or file order.
-enum Order {
-    /// Through the summary's chunk indexes; `buffer` holds one compressed chunk.
-    LogTime {
-        reader: Box<IndexedReader>,
-        buffer: Vec<u8>,
-    },
-    /// Record by record in file order (no summary or no chunk index).
-    File(Box<LinearReader>),
-}
-
-/// The file's summary (channels, schemas, chunk indexes) when it has one that is
-/// readable, has chunk indexes and names every topic in `topics`; `None` otherwise (read
-/// in file order then). The file position is left at the start.
-fn indexed_summary(handle: &mut File, topics: &[Topic]) -> Result<Option<mcap::Summary>, String> {
-    let size = handle.metadata().map_err(|e| e.to_string())?.len();
-    let mut reader = SummaryReader::new_with_options(
-        SummaryReaderOptions::default()
-            .with_file_size(size)
-            .with_record_length_limit(MAX_RECORD_BYTES),
-    );
-    let mut readable = true;
-    while let Some(event) = reader.next_event() {
-        let done = match event {
-            Ok(SummaryReadEvent::ReadRequest(need)) => match handle.read(reader.insert(need)) {
-                Ok(n) => {
-                    reader.notify_read(n);
-                    false
-                }
-                Err(_) => true,
-            },
-            Ok(SummaryReadEvent::SeekRequest(to)) => match handle.seek(to) {
-                Ok(pos) => {
-                    reader.notify_seeked(pos);
-                    false
-                }
-                Err(_) => true,
-            },
-            // A damaged summary: the file-order reader reports what is wrong.
-            Err(_) => true,
-        };
-        if done {
-            readable = false;
-            break;
-        }
-    }
-    handle.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
-    let summary = if readable { reader.finish() } else { None };
-    Ok(summary.filter(|s| {
-        !s.chunk_indexes.is_empty()
-            && topics
-                .iter()
-                .all(|t| s.channels.values().any(|c| c.topic == t.name))
-    }))
-}
-
-/// Checks the start of the file (magic and header record) with the linear reader, as a
-/// file-order read would: reading through the index skips it.
-fn check_start(handle: &mut File) -> Result<(), String> {
-    let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
-    );
-    let result = loop {
-        match reader.next_event() {
-            None => break Ok(()),
-            Some(Err(e)) => break Err(format!("MCAP: {e}")),
-            Some(Ok(LinearReadEvent::Record { .. })) => break Ok(()),
-            Some(Ok(LinearReadEvent::ReadRequest(need))) => {
-                match handle.read(reader.insert(need)) {
-                    Ok(n) => reader.notify_read(n),
-                    Err(e) => break Err(e.to_string()),
-                }
-            }
-        }
-    };
-    handle.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
-    result
 }
 
 /// Streaming MCAP source; see the module docs.
@@ -354,119 +221,6 @@ impl McapSource {
 
     fn err(&self, loc: Location, field_path: Option<String>, kind: ErrorKind) -> IoError {
         IoError::new(&self.file, loc, field_path, kind)
-    }
-
-    fn read_error(&self, e: std::io::Error) -> IoError {
-        self.err(Location::File, None, ErrorKind::Read(e.to_string()))
-    }
-
-    /// The next mapped message in log-time order, through the chunk indexes.
-    fn read_indexed(&mut self) -> Result<bool, IoError> {
-        loop {
-            let Order::LogTime { reader, buffer } = &mut self.order else {
-                return Ok(false);
-            };
-            let (header, data) = match reader.next_event() {
-                None => return Ok(false),
-                Some(Err(e)) => {
-                    let index = self.message_index;
-                    return Err(self.err(
-                        Location::Record(index),
-                        None,
-                        ErrorKind::Format(format!("MCAP: {e}")),
-                    ));
-                }
-                Some(Ok(IndexedReadEvent::Message { header, data })) => (header, data.to_vec()),
-                Some(Ok(IndexedReadEvent::ReadChunkRequest { offset, length })) => {
-                    buffer.resize(length, 0);
-                    let read = self
-                        .handle
-                        .seek(SeekFrom::Start(offset))
-                        .and_then(|_| self.handle.read_exact(buffer));
-                    if let Err(e) = read {
-                        return Err(self.read_error(e));
-                    }
-                    if let Err(e) = reader.insert_chunk_record_data(offset, buffer) {
-                        let index = self.message_index;
-                        return Err(self.err(
-                            Location::Record(index),
-                            None,
-                            ErrorKind::Format(format!("MCAP chunk at byte {offset}: {e}")),
-                        ));
-                    }
-                    continue;
-                }
-            };
-            if self.on_message(&header, &data)? {
-                return Ok(true);
-            }
-        }
-    }
-
-    /// The next mapped message in file order.
-    fn read_linear(&mut self) -> Result<bool, IoError> {
-        loop {
-            let Order::File(reader) = &mut self.order else {
-                return Ok(false);
-            };
-            let event = match reader.next_event() {
-                None => return Ok(false),
-                Some(Err(e)) => {
-                    let index = self.message_index;
-                    // A file that ends before its first message (the magic bytes alone,
-                    // a cut header) has no message to name: the byte it ends at is.
-                    let ended = self.handle.stream_position().ok().filter(|&at| {
-                        index == 0 && self.handle.metadata().is_ok_and(|m| m.len() == at)
-                    });
-                    return Err(match ended {
-                        Some(at) => self.err(
-                            Location::Offset(at),
-                            None,
-                            ErrorKind::Format(format!(
-                                "MCAP: {e}: the file ends at byte {at}, before any message"
-                            )),
-                        ),
-                        None => self.err(
-                            Location::Record(index),
-                            None,
-                            ErrorKind::Format(format!("MCAP: {e}")),
-                        ),
-                    });
-                }
-                Some(Ok(ev)) => ev,
-            };
-            let (opcode, data) = match event {
-                LinearReadEvent::ReadRequest(need) => {
-                    match self.handle.read(reader.insert(need)) {
-                        Ok(n) => reader.notify_read(n),
-                        Err(e) => return Err(self.read_error(e)),
-                    }
-                    continue;
-                }
-                LinearReadEvent::Record { opcode, data } => (opcode, data.to_vec()),
-            };
-            let record = mcap::parse_record(opcode, &data).map_err(|e| {
-                IoError::new(
-                    &self.file,
-                    Location::Record(self.message_index),
-                    None,
-                    ErrorKind::Format(format!("MCAP record: {e}")),
-                )
-            })?;
-            match record {
-                Record::Schema { header, data } => {
-                    self.schemas
-                        .insert(header.id, (header.name, header.encoding, data.into_owned()));
-                }
-                Record::Channel(ch) => {
-                    self.add_channel(ch.id, &ch.topic, &ch.message_encoding, ch.schema_id)?;
-                }
-                Record::Message { header, data } if self.on_message(&header, &data)? => {
-                    return Ok(true);
-                }
-                _ => {}
-            }
-        }
     }
 
     /// Decodes a message into its topic's queue: true when its channel is mapped.
