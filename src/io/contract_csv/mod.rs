@@ -15,6 +15,7 @@
 //! starts. At most [`RANGES_PER_WORKER`] ranges per worker plus one (and the one being
 //! read) exist at any time, their buffers reused.
 
+mod contract;
 mod cutting;
 mod range;
 
@@ -26,8 +27,9 @@ use std::sync::mpsc::{Receiver, sync_channel};
 use super::RowSource;
 use super::csv_input::open_text;
 use super::error::{ErrorKind, IoError, Location, column};
-use super::mapping::{Mapping, contract_mapping};
+use super::mapping::Mapping;
 use super::slots::SlotLayout;
+use contract::contract_mapping;
 use cutting::{Cutter, Workers};
 use range::{Columns, Fault, Range};
 
