@@ -156,8 +156,7 @@ mod tests {
     #[test]
     fn quad_x_skeleton_loads_once_filled_in() {
         let a = 0.15;
-        let p = params([(a, a, 0.05), (-a, -a, 0.05), (a, -a, -0.05), (-a, a, -0.05)]);
-        let rotors = rotors_from_parameters(&p).unwrap();
+        let rotors = quad(a, a, a, [0.05, 0.05, -0.05, -0.05]);
         let text = vehicle_skeleton(&rotors, "test", "t.ulg");
         assert!(text.contains("satisfies Assumption 2"), "{text}");
         let filled = text
@@ -174,6 +173,19 @@ mod tests {
         assert!(Vehicle::from_toml_str(&text, VehicleSource::Code).is_err());
     }
 
+    /// A four-rotor table in PX4's quad-x order (front right, rear left, front left,
+    /// rear right) with front hubs at (x, ±y_front), rear hubs at (−x, ±y_rear) and
+    /// moment coefficients `km`.
+    fn quad(x: f64, y_front: f64, y_rear: f64, km: [f64; 4]) -> Vec<Px4Rotor> {
+        let p = params([
+            (x, y_front, km[0]),
+            (-x, -y_rear, km[1]),
+            (x, -y_front, km[2]),
+            (-x, y_rear, km[3]),
+        ]);
+        rotors_from_parameters(&p).unwrap()
+    }
+
     #[test]
     fn missing_and_asymmetric() {
         let mut p = params([(0.1, 0.1, 0.05); 4]);
@@ -183,41 +195,29 @@ mod tests {
                 .unwrap_err()
                 .contains("CA_ROTOR2_KM")
         );
-        let p = params([
-            (0.29, 0.24, 0.05),
-            (-0.29, -0.24, 0.05),
-            (0.29, -0.24, -0.05),
-            (-0.29, 0.24, -0.05),
-        ]);
-        // A rectangle (H-frame): equal arms, unequal angles.
-        let text = layout_check(&rotors_from_parameters(&p).unwrap());
-        assert!(
-            text.starts_with("general planar layout") && text.contains("(equal interior angles)"),
-            "{text}"
-        );
-        // The SITL airframe's arms (0.288 m front, 0.241 m rear): accepted, with a note.
-        let p = params([
-            (0.1515, 0.245, 0.05),
-            (-0.1515, -0.1875, 0.05),
-            (0.1515, -0.245, -0.05),
-            (-0.1515, 0.1875, -0.05),
-        ]);
-        let text = layout_check(&rotors_from_parameters(&p).unwrap());
-        assert!(
-            text.starts_with("general planar layout") && text.contains("(equal arms)"),
-            "{text}"
-        );
-        // Three rotors spinning one way: refused.
-        let p = params([
-            (0.15, 0.15, 0.05),
-            (-0.15, -0.15, 0.05),
-            (0.15, -0.15, -0.05),
-            (-0.15, 0.15, 0.05),
-        ]);
-        let text = layout_check(&rotors_from_parameters(&p).unwrap());
-        assert!(
-            text.contains("refuse") && text.contains("balanced spins"),
-            "{text}"
-        );
+        let balanced = [0.05, 0.05, -0.05, -0.05];
+        // (layout, words the check must say): a rectangle (H-frame: equal arms, unequal
+        // angles); the SITL airframe's arms (0.288 m front, 0.241 m rear), accepted with
+        // a note; three rotors spinning one way, refused.
+        for (rotors, start, words) in [
+            (
+                quad(0.29, 0.24, 0.24, balanced),
+                "general planar layout",
+                "(equal interior angles)",
+            ),
+            (
+                quad(0.1515, 0.245, 0.1875, balanced),
+                "general planar layout",
+                "(equal arms)",
+            ),
+            (
+                quad(0.15, 0.15, 0.15, [0.05, 0.05, -0.05, 0.05]),
+                "the vehicle loader will refuse this layout",
+                "balanced spins",
+            ),
+        ] {
+            let text = layout_check(&rotors);
+            assert!(text.starts_with(start) && text.contains(words), "{text}");
+        }
     }
 }

@@ -84,29 +84,25 @@ impl MessageReader {
         )
     }
 
+    /// The error of a read that failed at the current position.
+    fn read_err(&self, e: std::io::Error) -> IoError {
+        IoError::new(
+            &self.file,
+            Location::Offset(self.pos),
+            None,
+            ErrorKind::Read(e.to_string()),
+        )
+    }
+
     fn read_into(&mut self, dst: &mut [u8]) -> Result<(), IoError> {
-        self.input.read_exact(dst).map_err(|e| {
-            IoError::new(
-                &self.file,
-                Location::Offset(self.pos),
-                None,
-                ErrorKind::Read(e.to_string()),
-            )
-        })?;
+        self.input.read_exact(dst).map_err(|e| self.read_err(e))?;
         self.pos += dst.len() as u64;
         Ok(())
     }
 
     fn skip(&mut self, n: u64) -> Result<(), IoError> {
-        let copied =
-            std::io::copy(&mut (&mut self.input).take(n), &mut std::io::sink()).map_err(|e| {
-                IoError::new(
-                    &self.file,
-                    Location::Offset(self.pos),
-                    None,
-                    ErrorKind::Read(e.to_string()),
-                )
-            })?;
+        let copied = std::io::copy(&mut (&mut self.input).take(n), &mut std::io::sink())
+            .map_err(|e| self.read_err(e))?;
         self.pos += copied;
         if copied < n {
             return Err(self.err(
