@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
-use mrsysid::io::contract_csv::write_contract_csv;
-use mrsysid::io::mcap_write::{Encoding, write_samples, written_mapping};
+use mrsysid::io::fixtures::mcap::{Encoding, write_samples, written_mapping};
+use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{ReadOptions, open_log};
 use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
@@ -112,14 +112,14 @@ fn bare_mcap(path: &Path) -> usize {
 /// number of decoded top-level fields.
 fn decoded_mcap(path: &Path) -> usize {
     use mcap::records::Record;
-    use mrsysid::io::{cdr, ros2msg};
+    use mrsysid::io::internals::{decode_cdr, parse_ros2_schema};
     let mut schemas = HashMap::new();
     let mut channels = HashMap::new();
     let mut fields = 0;
     for_each_record(path, |record| match record {
         Record::Schema { header, data } if header.encoding == "ros2msg" => {
             let text = std::str::from_utf8(&data).expect("schema text");
-            let schema = ros2msg::parse_schema(&header.name, text).expect("schema");
+            let schema = parse_ros2_schema(&header.name, text).expect("schema");
             schemas.insert(header.id, schema);
         }
         Record::Channel(ch) => {
@@ -127,7 +127,7 @@ fn decoded_mcap(path: &Path) -> usize {
         }
         Record::Message { header, data } => {
             let value = match schemas.get(&channels[&header.channel_id]) {
-                Some(schema) => cdr::decode(schema, &data).expect("CDR"),
+                Some(schema) => decode_cdr(schema, &data).expect("CDR"),
                 None => serde_json::from_slice(&data).expect("JSON"),
             };
             fields += value.as_object().map_or(0, |o| o.len());

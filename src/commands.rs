@@ -542,16 +542,16 @@ pub fn validate(
 pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> {
     let outputs: Vec<(&str, &Path)> = out.iter().map(|p| ("--out", *p)).collect();
     check_outputs(&outputs, &[("ULog", log)])?;
-    let defs = io::ulog::read_definitions(log)?;
-    let file = io::error::display_name(log);
-    let rotors = io::px4::rotors_from_parameters(&defs.parameters)
+    let defs = io::read_definitions(log)?;
+    let file = io::display_name(log);
+    let rotors = io::rotors_from_parameters(&defs.parameters)
         .map_err(|m| Failure::input(format!("{file}: {m}")))?;
     let name = match (defs.info.get("sys_name"), defs.info.get("ver_hw")) {
         (Some(s), Some(h)) => format!("{s} {h}"),
         (Some(s), None) => s.clone(),
         _ => file.clone(),
     };
-    let text = io::px4::vehicle_skeleton(&rotors, &name, &file);
+    let text = io::vehicle_skeleton(&rotors, &name, &file);
     match out {
         Some(path) => {
             write_atomically(path, text.as_bytes())
@@ -564,7 +564,7 @@ pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> 
         "note: {} rotors from CA_ROTOR_* of {file}; fill in mass, inertia, rotor_radius and \
          rotor_inertia (PX4 does not log them) before `mrsysid fit`.\nnote: layout: {}",
         rotors.len(),
-        io::px4::layout_check(&rotors)
+        io::layout_check(&rotors)
     ));
     Ok(())
 }

@@ -148,18 +148,7 @@ fn mix4<const SQUARE: bool, const FIRST: bool>(g: &[(f64, &[f64]); 4], dst: &mut
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vehicle::{MassAndRotorProperties, Preset};
-
-    fn props() -> MassAndRotorProperties {
-        MassAndRotorProperties {
-            mass: 1.0,
-            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
-            air_density: 1.225,
-            rotor_radius: 0.1,
-            hub_height: 0.0,
-            rotor_inertia: 0.0,
-        }
-    }
+    use crate::vehicle::{Preset, test_props as props};
 
     #[test]
     fn quad_x_mixing_matches_eq_20_by_hand() {

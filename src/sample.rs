@@ -66,7 +66,7 @@ pub struct SampleChunk {
     /// Rotor accelerations Ω̇_i, rad/s², one vector per rotor; empty when not available.
     pub omega_dot: Vec<Vec<f64>>,
     /// Rates of the rotor accelerations Ω̈_i, rad/s³, one vector per rotor: derived from
-    /// Ω̇ by the fit pipeline ([`crate::io::derive::rotor_jerk`]), never read from a
+    /// Ω̇ by the fit pipeline (`io`'s `rotor_jerk`), never read from a
     /// log; empty when not derived.
     pub omega_ddot: Vec<Vec<f64>>,
     /// Slow part of each rotor's Ω_i², rad²/s²: its zero-phase low-pass at each cut-off

@@ -5,8 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use crate::io::error::{ErrorKind, IoError, Location, display_name};
-use crate::io::validate::QUATERNION_NORM_TOLERANCE;
+use crate::io::{ErrorKind, IoError, Location, QUATERNION_NORM_TOLERANCE, display_name};
 use crate::sample::{CHUNK_SAMPLES, Sample, SampleChunk, Signals};
 
 /// One log of a fit: a file, or samples in memory.

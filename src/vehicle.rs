@@ -249,6 +249,43 @@ impl fmt::Display for Assumption2Breach {
     }
 }
 
+/// What the layout checks of [`Vehicle`] decide about a rotor table alone, before mass
+/// properties are known (the PX4 skeleton reports it for a table read from a log).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RotorLayout {
+    /// Arm length ℓ (mean hub distance from the CG in the rotor plane), m.
+    pub arm_length: f64,
+    /// Configuration class of Definition 1, or [`ConfigurationClass::GeneralPlanar`] when
+    /// the layout breaks Assumption 2.
+    pub class: ConfigurationClass,
+    /// The conditions of Assumption 2 the layout breaks (notes, not errors); empty when
+    /// Assumption 2 holds.
+    pub breaches: Vec<Assumption2Breach>,
+}
+
+impl RotorLayout {
+    /// Checks `rotors` as the vehicle loader does, with the default tolerance
+    /// [`DEFAULT_GEOMETRY_TOLERANCE`]: the error is the loader's refusal.
+    pub fn check(rotors: &[Rotor]) -> Result<Self, VehicleErrorKind> {
+        Self::with_tolerance(rotors, DEFAULT_GEOMETRY_TOLERANCE)
+    }
+
+    fn with_tolerance(rotors: &[Rotor], tol: f64) -> Result<Self, VehicleErrorKind> {
+        let arm_length = check_layout(rotors, tol)?;
+        let breaches = assumption2_breaches(rotors, arm_length, tol);
+        let class = if breaches.is_empty() {
+            classify(rotors, arm_length, tol)
+        } else {
+            ConfigurationClass::GeneralPlanar
+        };
+        Ok(Self {
+            arm_length,
+            class,
+            breaches,
+        })
+    }
+}
+
 /// Mass, inertia, air and rotor properties shared by every layout.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MassAndRotorProperties {
@@ -446,13 +483,11 @@ impl Vehicle {
     ) -> Result<Self, VehicleErrorKind> {
         check_properties(&props)?;
         check_positive("geometry_tolerance", tol)?;
-        let arm_length = check_layout(&rotors, tol)?;
-        let breaches = assumption2_breaches(&rotors, arm_length, tol);
-        let class = if breaches.is_empty() {
-            classify(&rotors, arm_length, tol)
-        } else {
-            ConfigurationClass::GeneralPlanar
-        };
+        let RotorLayout {
+            arm_length,
+            class,
+            breaches,
+        } = RotorLayout::with_tolerance(&rotors, tol)?;
         Ok(Self {
             name,
             props,
@@ -925,18 +960,30 @@ fn classify(rotors: &[Rotor], arm: f64, tol: f64) -> ConfigurationClass {
     }
 }
 
+/// The mass and rotor properties of the crate's unit-test vehicles: 1 kg, I =
+/// diag(0.01, 0.01, 0.02) kg m², ρ = 1.225 kg/m³, R = 0.1 m, rotors in the CG plane,
+/// J_z = 0. A test that needs another value overrides it with `..test_props()`.
+#[cfg(test)]
+pub(crate) fn test_props() -> MassAndRotorProperties {
+    MassAndRotorProperties {
+        mass: 1.0,
+        inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
+        air_density: 1.225,
+        rotor_radius: 0.1,
+        hub_height: 0.0,
+        rotor_inertia: 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn props() -> MassAndRotorProperties {
         MassAndRotorProperties {
-            mass: 1.0,
-            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
-            air_density: 1.225,
-            rotor_radius: 0.1,
             hub_height: 0.02,
             rotor_inertia: 3e-5,
+            ..test_props()
         }
     }
 

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use io_support::{analytic_chunk, assert_same, concat, quad};
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::io::contract_csv::write_contract_csv;
+use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{ReadOptions, open_log};
 
 fn tmp(name: &str) -> PathBuf {

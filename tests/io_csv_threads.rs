@@ -21,8 +21,8 @@ const ROWS: usize = 200;
 /// three workers; the default range size (one range for these files), ranges of about
 /// 17 rows, and 97-byte ranges (one or two rows each).
 const SETTINGS: [(usize, usize); 6] = [
-    (0, mrsysid::io::contract_csv::DEFAULT_RANGE_BYTES),
-    (1, mrsysid::io::contract_csv::DEFAULT_RANGE_BYTES),
+    (0, mrsysid::io::DEFAULT_RANGE_BYTES),
+    (1, mrsysid::io::DEFAULT_RANGE_BYTES),
     (0, 1000),
     (1, 1000),
     (3, 1000),

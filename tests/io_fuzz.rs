@@ -14,13 +14,11 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use io_support::{Px4Log, analytic_chunk, px4_like_log, quad};
-use mrsysid::io::cdr::decode;
-use mrsysid::io::contract_csv::write_contract_csv;
-use mrsysid::io::mcap_write::{Encoding, write_samples, written_mapping};
-use mrsysid::io::ros2msg::parse_schema;
-use mrsysid::io::ulog::read_definitions;
-use mrsysid::io::ulog_write;
-use mrsysid::io::{InvalidSamples, Mapping, ReadOptions, open_log};
+use mrsysid::io::fixtures;
+use mrsysid::io::fixtures::mcap::{Encoding, write_samples, written_mapping};
+use mrsysid::io::fixtures::write_contract_csv;
+use mrsysid::io::internals::{decode_cdr as decode, parse_ros2_schema as parse_schema};
+use mrsysid::io::{InvalidSamples, Mapping, ReadOptions, open_log, read_definitions};
 use mrsysid::vehicle::{Vehicle, VehicleSource};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
@@ -227,7 +225,7 @@ fn fuzz_ulog_reader() {
     let vehicle = quad(0.0);
     let src = analytic_chunk(30, 100.0);
     let written = tmp("base.ulg");
-    ulog_write::write_samples(&written, [&src]).unwrap();
+    fixtures::ulog::write_samples(&written, [&src]).unwrap();
     let px4 = px4_like_log(Px4Log {
         duration_us: 300_000,
         dropout_at: Some(1_150_000),
@@ -236,7 +234,7 @@ fn fuzz_ulog_reader() {
     let bases = [
         (
             std::fs::read(&written).unwrap(),
-            ulog_write::written_mapping(4, true, true, true),
+            fixtures::ulog::written_mapping(4, true, true, true),
         ),
         (px4, px4_mapping),
     ];

@@ -8,10 +8,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use io_support::{analytic_chunk, assert_same, concat, quad};
-use mrsysid::io::contract_csv::write_contract_csv;
-use mrsysid::io::mcap_write::{
+use mrsysid::io::fixtures::mcap::{
     Encoding, Layout, write_samples, write_samples_laid_out, written_mapping,
 };
+use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{Mapping, ReadOptions, open_log};
 use mrsysid::sample::SampleChunk;
 
@@ -188,6 +188,11 @@ fn asynchronous_topics_are_interpolated_within_max_gap() {
     // from 5 ms on are aligned and 1 is dropped.
     assert_eq!(c.len(), 399);
     assert_eq!(s.dropped.get("topic not aligned within max_gap"), Some(&1));
+    assert!(
+        s.first_dropped[0].ends_with("no messages within max_gap = 0.1 s around t = 0 s"),
+        "{:?}",
+        s.first_dropped
+    );
     for k in 0..c.len() {
         // Rotor speed linear in t: interpolation is exact up to rounding, 1e-9 rad/s.
         let want = (6000.0 + 1000.0 * c.t[k]) * std::f64::consts::PI / 30.0;

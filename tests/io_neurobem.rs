@@ -7,7 +7,7 @@ mod scratch;
 
 use std::path::Path;
 
-use mrsysid::io::contract_csv::write_contract_csv;
+use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{Mapping, ReadOptions, open_log};
 use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::Vehicle;

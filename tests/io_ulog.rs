@@ -11,9 +11,8 @@ use std::path::{Path, PathBuf};
 use io_support::{
     Px4Log, analytic_chunk, concat, px4_gyro, px4_like_log, px4_pwm, px4_rpm, px4_velocity, quad,
 };
-use mrsysid::io::ulog::read_definitions;
-use mrsysid::io::ulog_write::{UlogWriter, write_samples, written_mapping};
-use mrsysid::io::{IoError, Mapping, ReadOptions, Summary, open_log};
+use mrsysid::io::fixtures::ulog::{UlogWriter, write_samples, written_mapping};
+use mrsysid::io::{IoError, Mapping, ReadOptions, Summary, open_log, read_definitions};
 use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::Vehicle;
 
@@ -139,6 +138,12 @@ fn dropout_is_reported_and_never_bridged() {
         "first sample after the dropout at {nearest_after}"
     );
     assert!(summary.dropped.values().sum::<u64>() > 10);
+    // The first sample after the last slow message before the dropout, in words.
+    assert_eq!(
+        summary.first_dropped[2],
+        "dropout.ulg: byte 20187, field \"vehicle_local_position\": no messages within \
+         align_gap = 0.3 s around t = 2.004 s (or a logger dropout between them)"
+    );
 }
 
 #[test]
@@ -192,8 +197,8 @@ fn vehicle_skeleton_from_ca_parameters() {
     let defs = read_definitions(&path).unwrap();
     assert_eq!(defs.parameters["CA_ROTOR_COUNT"], 4.0);
     assert_eq!(defs.info["ver_hw"], "TEST_BOARD");
-    let rotors = mrsysid::io::px4::rotors_from_parameters(&defs.parameters).unwrap();
-    let text = mrsysid::io::px4::vehicle_skeleton(&rotors, "PX4", "params.ulg");
+    let rotors = mrsysid::io::rotors_from_parameters(&defs.parameters).unwrap();
+    let text = mrsysid::io::vehicle_skeleton(&rotors, "PX4", "params.ulg");
     let filled = text
         .replace("# mass = 1.5", "mass = 1.5")
         .replace("# inertia", "inertia")

@@ -224,7 +224,7 @@ fn json_reports_are_identical_for_any_thread_count_and_range_size() {
     // the default 512 KiB, 188 of 4 KiB and ~7 900 of 97 bytes (one or two rows each);
     // one thread parses inline, two give one parse worker, four two.
     let name = "quad_x_flight_quadratic_drag.csv";
-    let reference = json_report(name, 1, mrsysid::io::contract_csv::DEFAULT_RANGE_BYTES);
+    let reference = json_report(name, 1, mrsysid::io::DEFAULT_RANGE_BYTES);
     assert!(
         reference.contains("\"diagnosis\""),
         "report has a diagnosis"

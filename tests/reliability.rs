@@ -602,7 +602,7 @@ fn first_error(path: &Path, mapping: &Mapping) -> String {
 /// A ULog with formats and parameters but no data message says so.
 #[test]
 fn a_ulog_without_data_messages_says_so() {
-    use mrsysid::io::ulog_write::UlogWriter;
+    use mrsysid::io::fixtures::ulog::UlogWriter;
     let mut w = UlogWriter::new(0);
     w.flag_bits([0; 8], [0; 8], [0; 3]);
     w.format("s:uint64_t timestamp;double[3] v;double[3] w;double[4] o;double[3] f;");

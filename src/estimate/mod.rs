@@ -434,22 +434,13 @@ mod tests {
     use super::*;
     use crate::model::{ModelOptions, Workspace};
     use crate::sample::{Sample, SampleChunk};
-    use crate::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 
     /// The refits of cross-validation and of a diagnosis skip Algorithm 1; adding its
     /// tables afterwards gives exactly the fit of [`fit`] (equal as values, so every
     /// estimate, σ and metric is the same bits), and the estimates never depend on it.
     #[test]
     fn a_fit_without_fsoa_completed_equals_the_full_fit() {
-        let props = MassAndRotorProperties {
-            mass: 1.0,
-            inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
-            air_density: 1.2,
-            rotor_radius: 0.1,
-            hub_height: 0.05,
-            rotor_inertia: 0.0,
-        };
-        let v = Vehicle::preset("q", Preset::QuadX, 0.25, 1.0, props).unwrap();
+        let v = crate::model::test_quad();
         let structure = ModelStructure::eq22(&v, ModelOptions::default());
         let mut chunk = SampleChunk::with_capacity(4, 2000, true);
         for k in 0..2000 {

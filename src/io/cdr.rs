@@ -1,10 +1,10 @@
 //! ROS 2 CDR (XCDR1, little or big endian) decoding into a JSON value, driven by a
-//! [`Schema`], so the same field paths address JSON and CDR messages. And a minimal
-//! little-endian encoder for the writer.
+//! [`Schema`], so the same field paths address JSON and CDR messages.
 
 use serde_json::{Map, Value};
 
-use super::ros2msg::{Field, FieldType, Primitive, Schema, Shape};
+use super::ros2msg::{Field, FieldType, Schema, Shape};
+use super::scalar::Scalar;
 
 /// Largest sequence length accepted (guards against corrupt length prefixes).
 const MAX_SEQUENCE: usize = 1 << 24;
@@ -51,7 +51,7 @@ impl Cursor<'_> {
         })
     }
 
-    fn primitive(&mut self, p: Primitive) -> Result<Value, String> {
+    fn primitive(&mut self, p: Scalar) -> Result<Value, String> {
         let n = p.size();
         self.align(n);
         let little = self.little;
@@ -68,17 +68,17 @@ impl Cursor<'_> {
             }};
         }
         Ok(match p {
-            Primitive::Bool => Value::Bool(b[0] != 0),
-            Primitive::I8 => Value::from(b[0] as i8),
-            Primitive::U8 => Value::from(b[0]),
-            Primitive::I16 => Value::from(num!(i16)),
-            Primitive::U16 => Value::from(num!(u16)),
-            Primitive::I32 => Value::from(num!(i32)),
-            Primitive::U32 => Value::from(num!(u32)),
-            Primitive::I64 => Value::from(num!(i64)),
-            Primitive::U64 => Value::from(num!(u64)),
-            Primitive::F32 => number(num!(f32) as f64),
-            Primitive::F64 => number(num!(f64)),
+            Scalar::Bool => Value::Bool(b[0] != 0),
+            Scalar::I8 => Value::from(b[0] as i8),
+            Scalar::U8 => Value::from(b[0]),
+            Scalar::I16 => Value::from(num!(i16)),
+            Scalar::U16 => Value::from(num!(u16)),
+            Scalar::I32 => Value::from(num!(i32)),
+            Scalar::U32 => Value::from(num!(u32)),
+            Scalar::I64 => Value::from(num!(i64)),
+            Scalar::U64 => Value::from(num!(u64)),
+            Scalar::F32 => number(num!(f32) as f64),
+            Scalar::F64 => number(num!(f64)),
         })
     }
 }
@@ -160,45 +160,6 @@ fn decode_one(
             Ok(Value::String(String::from_utf8_lossy(s).into_owned()))
         }
         FieldType::Message(m) => decode_message(schema, m, c, depth + 1),
-    }
-}
-
-/// Little-endian CDR encoder of float64 scalars and sequences (what the writer needs).
-#[derive(Debug, Default)]
-pub struct Encoder {
-    buf: Vec<u8>,
-}
-
-impl Encoder {
-    /// A message with the CDR_LE encapsulation header.
-    pub fn new() -> Self {
-        Self {
-            buf: vec![0, 1, 0, 0],
-        }
-    }
-
-    fn align(&mut self, n: usize) {
-        while !(self.buf.len() - 4).is_multiple_of(n) {
-            self.buf.push(0);
-        }
-    }
-
-    /// Appends a float64.
-    pub fn f64(&mut self, x: f64) {
-        self.align(8);
-        self.buf.extend_from_slice(&x.to_le_bytes());
-    }
-
-    /// Appends a float64 sequence (`float64[]`).
-    pub fn f64_seq(&mut self, xs: &[f64]) {
-        self.align(4);
-        self.buf.extend_from_slice(&(xs.len() as u32).to_le_bytes());
-        xs.iter().for_each(|&x| self.f64(x));
-    }
-
-    /// The encoded bytes.
-    pub fn finish(self) -> Vec<u8> {
-        self.buf
     }
 }
 

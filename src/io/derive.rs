@@ -43,7 +43,7 @@ impl Default for DeriveOptions {
 
 impl DeriveOptions {
     /// Checks window and order; the message names the offending option.
-    pub fn check(&self) -> Result<(), String> {
+    pub(crate) fn check(&self) -> Result<(), String> {
         if !(1..=5).contains(&self.sg_order) {
             return Err(format!("sg_order = {} must be in 1..=5", self.sg_order));
         }

@@ -77,7 +77,12 @@ pub enum ErrorKind {
 impl IoError {
     /// An error at `location` of `file`, about the labelled `field` when given (see
     /// [`column()`], [`field`], [`key`]).
-    pub fn new(file: &str, location: Location, field: Option<String>, kind: ErrorKind) -> Self {
+    pub(crate) fn new(
+        file: &str,
+        location: Location,
+        field: Option<String>,
+        kind: ErrorKind,
+    ) -> Self {
         Self {
             file: file.to_string(),
             location,
@@ -88,7 +93,7 @@ impl IoError {
 
     /// True for errors about one sample's values, which the drop-and-count policy may
     /// skip: anything else (structure, mapping, missing signals) is always fatal.
-    pub fn is_sample_level(&self) -> bool {
+    pub(crate) fn is_sample_level(&self) -> bool {
         matches!(
             self.kind,
             ErrorKind::NotANumber(_)
@@ -100,7 +105,7 @@ impl IoError {
     }
 
     /// Short reason name used to count dropped samples ("not finite", …).
-    pub fn reason(&self) -> &'static str {
+    pub(crate) fn reason(&self) -> &'static str {
         match self.kind {
             ErrorKind::Read(_) => "unreadable",
             ErrorKind::Empty => "empty",

@@ -278,4 +278,42 @@ mod tests {
         // Fewer samples than regressors: no solution.
         assert!(NormalEquations::new(3, 1).solve(0, 3).is_none());
     }
+
+    #[test]
+    fn layout_regression_recovers_positions_spins_and_rotor_inertia_exactly() {
+        // Synthetic noiseless loads of a quad-x (ℓ = 0.11 m) numbered like NeuroBEM:
+        // T = k Ω², Q = k_Q Ω², M_z = -Σ σ (Q + J Ω̇). Least squares recovers them to rounding.
+        let (k, kq, jz) = (1.5e-6, 2.0e-8, 8e-7);
+        let a = 0.11 / 2f64.sqrt();
+        let pos = [[-a, a], [a, a], [-a, -a], [a, -a]];
+        let spin = [1.0, -1.0, -1.0, 1.0];
+        let mut acc = LayoutAccumulator::new(4, true);
+        for n in 0..2000 {
+            let t = n as f64 * 0.0025;
+            let w: Vec<f64> = (0..4)
+                .map(|i| 1000.0 + 300.0 * (1.1 * t * (i + 1) as f64 + i as f64).sin())
+                .collect();
+            let wd: Vec<f64> = (0..4)
+                .map(|i| 500.0 * (0.7 * t * (i + 2) as f64).cos())
+                .collect();
+            let mut wrench = [0.0; 6];
+            for i in 0..4 {
+                let thrust = k * w[i] * w[i];
+                wrench[2] -= thrust;
+                wrench[3] -= pos[i][1] * thrust;
+                wrench[4] += pos[i][0] * thrust;
+                wrench[5] -= spin[i] * (kq * w[i] * w[i] + jz * wd[i]);
+            }
+            acc.push(&w, &wd, &wrench);
+        }
+        let r = acc.finish().unwrap();
+        assert_eq!(r.spins, spin.to_vec());
+        // Noiseless data: errors are rounding in the normal equations, 1e-6 relative.
+        assert!((r.thrust_coefficient - k).abs() < 1e-6 * k);
+        assert!((r.arm_length - 0.11).abs() < 1e-6);
+        for (got, want) in r.positions.iter().zip(pos) {
+            assert!((got[0] - want[0]).abs() < 1e-6 && (got[1] - want[1]).abs() < 1e-6);
+        }
+        assert!((r.rotor_inertia.unwrap() - jz).abs() < 1e-6 * jz * 100.0);
+    }
 }

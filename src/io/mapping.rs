@@ -19,7 +19,6 @@
 //! The format is documented in `docs/mapping.md`. Without a mapping file the contract
 //! header (`docs/data-contract.md`) is mapped by [`contract_mapping`].
 
-use std::collections::HashSet;
 use std::path::Path;
 
 use serde::Deserialize;
@@ -80,7 +79,7 @@ impl AxisMap {
 
 impl BodyFrame {
     /// Map from this frame's components to FRD components.
-    pub fn to_frd(self) -> AxisMap {
+    pub(crate) fn to_frd(self) -> AxisMap {
         match self {
             Self::Frd => AxisMap {
                 perm: [0, 1, 2],
@@ -96,7 +95,7 @@ impl BodyFrame {
 
 impl WorldFrame {
     /// Map from this frame's components to NED components.
-    pub fn to_ned(self) -> AxisMap {
+    pub(crate) fn to_ned(self) -> AxisMap {
         match self {
             Self::Ned => AxisMap {
                 perm: [0, 1, 2],
@@ -140,7 +139,7 @@ pub struct SignalMap {
     /// `esc[2].esc_rpm`), one per component.
     #[serde(default)]
     pub fields: Vec<String>,
-    /// Unit of the logged values (see [`super::units::parse_unit`]); SI when absent.
+    /// Unit of the logged values (the names of `docs/mapping.md`); SI when absent.
     pub unit: Option<String>,
     /// Motor pole pairs, for unit `erpm`.
     pub pole_pairs: Option<f64>,
@@ -175,7 +174,7 @@ pub struct ActuatorMap {
 
 impl ActuatorMap {
     /// Checks the ranges; the message names the offending key.
-    pub fn check(&self) -> Result<(), String> {
+    pub(crate) fn check(&self) -> Result<(), String> {
         match (self.pwm_min, self.pwm_max) {
             (Some(lo), Some(hi)) if lo.is_finite() && hi.is_finite() && lo < hi => {}
             (None, None) => {}
@@ -208,7 +207,7 @@ impl ActuatorMap {
     }
 
     /// Commanded rotor speed of actuator output `x`, in the signal's unit.
-    pub fn speed(&self, x: f64) -> f64 {
+    pub(crate) fn speed(&self, x: f64) -> f64 {
         let u = match (self.pwm_min, self.pwm_max) {
             (Some(lo), Some(hi)) => (x - lo) / (hi - lo),
             _ => x,
@@ -219,7 +218,7 @@ impl ActuatorMap {
     }
 
     /// In words, for the reader's summary.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let range = match (self.pwm_min, self.pwm_max) {
             (Some(lo), Some(hi)) => format!("PWM {lo}..{hi}"),
             _ => "normalised 0..1".into(),
@@ -440,7 +439,7 @@ impl Mapping {
     }
 
     /// The location of `signal`, if mapped.
-    pub fn get(&self, signal: Signal) -> Option<&SignalMap> {
+    pub(crate) fn get(&self, signal: Signal) -> Option<&SignalMap> {
         let s = &self.signals;
         match signal {
             Signal::Time => self.time.as_ref(),
@@ -477,7 +476,7 @@ impl Mapping {
     }
 
     /// Sets the columns of `signal` (SI units).
-    pub fn set_columns(&mut self, signal: Signal, columns: Vec<String>) {
+    pub(crate) fn set_columns(&mut self, signal: Signal, columns: Vec<String>) {
         *self.slot(signal) = Some(SignalMap {
             columns,
             ..SignalMap::default()
@@ -485,7 +484,7 @@ impl Mapping {
     }
 
     /// Conversion factor to SI of `signal`'s unit (1 when no unit is given).
-    pub fn factor(&self, signal: Signal) -> f64 {
+    pub(crate) fn factor(&self, signal: Signal) -> f64 {
         self.get(signal)
             .and_then(|m| {
                 m.unit
@@ -535,89 +534,4 @@ fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-/// The mapping of a contract CSV (`docs/data-contract.md`) with header `header`: SI units, FRD/NED,
-/// `omega_1..omega_N` in vehicle order, optional `ax..`, `height`, `qw..`,
-/// `omega_dot_1..`. Errors name the file (line 1) and the column concerned.
-pub fn contract_mapping(header: &[&str], rotors: usize, file: &str) -> Result<Mapping, IoError> {
-    let err = |col: Option<String>, kind| IoError::new(file, Location::Line(1), col, kind);
-    let mut seen = HashSet::new();
-    for name in header {
-        if !seen.insert(*name) {
-            return Err(err(
-                super::error::column(name),
-                ErrorKind::Format("duplicate column name".into()),
-            ));
-        }
-    }
-    let has = |c: &str| seen.contains(c);
-    let mut m = Mapping::default();
-    let groups: [(Signal, Vec<String>); 8] = [
-        (Signal::Time, vec!["t".into()]),
-        (Signal::VelocityBody, names(&["u", "v", "w"])),
-        (Signal::Rates, names(&["p", "q", "r"])),
-        (Signal::Force, names(&["fx", "fy", "fz"])),
-        (Signal::Moment, names(&["mx", "my", "mz"])),
-        (Signal::SpecificForce, names(&["ax", "ay", "az"])),
-        (Signal::Height, vec!["height".into()]),
-        (Signal::Attitude, names(&["qw", "qx", "qy", "qz"])),
-    ];
-    for (signal, cols) in groups {
-        let present = cols.iter().filter(|c| has(c)).count();
-        if present == cols.len() {
-            m.set_columns(signal, cols);
-        } else if present > 0 {
-            let missing = cols
-                .iter()
-                .find(|c| !has(c))
-                .expect("some column is missing");
-            return Err(err(
-                super::error::column(missing),
-                ErrorKind::MissingSignal(format!(
-                    "missing column of {} (has {present} of {})",
-                    signal.key(),
-                    cols.join(",")
-                )),
-            ));
-        }
-    }
-    for (signal, prefix) in [
-        (Signal::RotorSpeeds, "omega_"),
-        (Signal::RotorAccelerations, "omega_dot_"),
-    ] {
-        let count = header
-            .iter()
-            .filter(|h| {
-                h.strip_prefix(prefix)
-                    .is_some_and(|n| n.parse::<usize>().is_ok())
-            })
-            .count();
-        if count == 0 {
-            continue;
-        }
-        if count != rotors {
-            return Err(err(
-                None,
-                ErrorKind::Mapping(format!(
-                    "header has {count} {prefix}* columns but the vehicle has {rotors} rotors"
-                )),
-            ));
-        }
-        let cols: Vec<String> = (1..=rotors).map(|i| format!("{prefix}{i}")).collect();
-        if let Some(missing) = cols.iter().find(|c| !has(c)) {
-            return Err(err(
-                super::error::column(missing),
-                ErrorKind::MissingSignal(format!(
-                    "missing column (rotors are numbered {prefix}1..{prefix}{rotors})"
-                )),
-            ));
-        }
-        m.set_columns(signal, cols);
-    }
-    Ok(m)
-}
-
-fn names(list: &[&str]) -> Vec<String> {
-    list.iter().map(|s| s.to_string()).collect()
 }

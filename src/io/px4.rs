@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::vehicle::{MassAndRotorProperties, Rotor, Vehicle};
+use crate::vehicle::{Rotor, RotorLayout};
 
 /// One rotor from PX4's control-allocation parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,15 +112,7 @@ pub fn vehicle_skeleton(rotors: &[Px4Rotor], name: &str, log_name: &str) -> Stri
 /// Whether the rotor layout satisfies the seed's Assumption 2, is a general planar layout
 /// the vehicle loader accepts with a note, or is refused, in words.
 pub fn layout_check(rotors: &[Px4Rotor]) -> String {
-    let props = MassAndRotorProperties {
-        mass: 1.0,
-        inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        air_density: 1.225,
-        rotor_radius: 0.1,
-        hub_height: 0.0,
-        rotor_inertia: 0.0,
-    };
-    let table = rotors
+    let table: Vec<Rotor> = rotors
         .iter()
         .map(|r| Rotor {
             x: r.x,
@@ -128,31 +120,27 @@ pub fn layout_check(rotors: &[Px4Rotor]) -> String {
             spin: if r.km < 0.0 { 1.0 } else { -1.0 },
         })
         .collect();
-    match Vehicle::from_rotors("px4", props, table) {
-        Ok(v) if v.satisfies_assumption2() => format!(
+    match RotorLayout::check(&table) {
+        Ok(layout) if layout.breaches.is_empty() => format!(
             "satisfies Assumption 2 (arm length {:.4} m, {:?})",
-            v.arm_length(),
-            v.class()
+            layout.arm_length, layout.class
         ),
-        Ok(v) => {
-            let breaches: Vec<String> = v
-                .assumption2_breaches()
-                .iter()
-                .map(|b| b.to_string())
-                .collect();
+        Ok(layout) => {
+            let breaches: Vec<String> = layout.breaches.iter().map(|b| b.to_string()).collect();
             format!(
                 "general planar layout (mean arm {:.4} m), accepted with a note: {}",
-                v.arm_length(),
+                layout.arm_length,
                 breaches.join("; ")
             )
         }
-        Err(e) => format!("the vehicle loader will refuse this layout: {}", e.kind),
+        Err(kind) => format!("the vehicle loader will refuse this layout: {kind}"),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::vehicle::{Vehicle, VehicleSource};
 
     fn params(arms: [(f64, f64, f64); 4]) -> BTreeMap<String, f64> {
         let mut p = BTreeMap::from([("CA_ROTOR_COUNT".to_string(), 4.0)]);
@@ -168,22 +156,34 @@ mod tests {
     #[test]
     fn quad_x_skeleton_loads_once_filled_in() {
         let a = 0.15;
-        let p = params([(a, a, 0.05), (-a, -a, 0.05), (a, -a, -0.05), (-a, a, -0.05)]);
-        let rotors = rotors_from_parameters(&p).unwrap();
+        let rotors = quad(a, a, a, [0.05, 0.05, -0.05, -0.05]);
         let text = vehicle_skeleton(&rotors, "test", "t.ulg");
         assert!(text.contains("satisfies Assumption 2"), "{text}");
         let filled = text
             .replace("# mass = 1.5", "mass = 1.5")
             .replace("# inertia", "inertia")
             .replace("# rotor_radius", "rotor_radius");
-        let v = Vehicle::from_toml_str(&filled, crate::vehicle::VehicleSource::Code).unwrap();
+        let v = Vehicle::from_toml_str(&filled, VehicleSource::Code).unwrap();
         assert_eq!(v.rotor_count(), 4);
         // KM > 0 (CCW) -> spin -1; hub 3 cm above the CG (PZ = -0.03, z down).
         assert_eq!(v.rotors()[0].spin, -1.0);
         assert_eq!(v.rotors()[2].spin, 1.0);
         assert!((v.props.hub_height - 0.03).abs() < 1e-12);
         assert!((v.arm_length() - a * 2f64.sqrt()).abs() < 1e-12);
-        assert!(Vehicle::from_toml_str(&text, crate::vehicle::VehicleSource::Code).is_err());
+        assert!(Vehicle::from_toml_str(&text, VehicleSource::Code).is_err());
+    }
+
+    /// A four-rotor table in PX4's quad-x order (front right, rear left, front left,
+    /// rear right) with front hubs at (x, ±y_front), rear hubs at (−x, ±y_rear) and
+    /// moment coefficients `km`.
+    fn quad(x: f64, y_front: f64, y_rear: f64, km: [f64; 4]) -> Vec<Px4Rotor> {
+        let p = params([
+            (x, y_front, km[0]),
+            (-x, -y_rear, km[1]),
+            (x, -y_front, km[2]),
+            (-x, y_rear, km[3]),
+        ]);
+        rotors_from_parameters(&p).unwrap()
     }
 
     #[test]
@@ -195,41 +195,29 @@ mod tests {
                 .unwrap_err()
                 .contains("CA_ROTOR2_KM")
         );
-        let p = params([
-            (0.29, 0.24, 0.05),
-            (-0.29, -0.24, 0.05),
-            (0.29, -0.24, -0.05),
-            (-0.29, 0.24, -0.05),
-        ]);
-        // A rectangle (H-frame): equal arms, unequal angles.
-        let text = layout_check(&rotors_from_parameters(&p).unwrap());
-        assert!(
-            text.starts_with("general planar layout") && text.contains("(equal interior angles)"),
-            "{text}"
-        );
-        // The SITL airframe's arms (0.288 m front, 0.241 m rear): accepted, with a note.
-        let p = params([
-            (0.1515, 0.245, 0.05),
-            (-0.1515, -0.1875, 0.05),
-            (0.1515, -0.245, -0.05),
-            (-0.1515, 0.1875, -0.05),
-        ]);
-        let text = layout_check(&rotors_from_parameters(&p).unwrap());
-        assert!(
-            text.starts_with("general planar layout") && text.contains("(equal arms)"),
-            "{text}"
-        );
-        // Three rotors spinning one way: refused.
-        let p = params([
-            (0.15, 0.15, 0.05),
-            (-0.15, -0.15, 0.05),
-            (0.15, -0.15, -0.05),
-            (-0.15, 0.15, 0.05),
-        ]);
-        let text = layout_check(&rotors_from_parameters(&p).unwrap());
-        assert!(
-            text.contains("refuse") && text.contains("balanced spins"),
-            "{text}"
-        );
+        let balanced = [0.05, 0.05, -0.05, -0.05];
+        // (layout, words the check must say): a rectangle (H-frame: equal arms, unequal
+        // angles); the SITL airframe's arms (0.288 m front, 0.241 m rear), accepted with
+        // a note; three rotors spinning one way, refused.
+        for (rotors, start, words) in [
+            (
+                quad(0.29, 0.24, 0.24, balanced),
+                "general planar layout",
+                "(equal interior angles)",
+            ),
+            (
+                quad(0.1515, 0.245, 0.1875, balanced),
+                "general planar layout",
+                "(equal arms)",
+            ),
+            (
+                quad(0.15, 0.15, 0.15, [0.05, 0.05, -0.05, 0.05]),
+                "the vehicle loader will refuse this layout",
+                "balanced spins",
+            ),
+        ] {
+            let text = layout_check(&rotors);
+            assert!(text.starts_with(start) && text.contains(words), "{text}");
+        }
     }
 }

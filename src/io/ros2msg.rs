@@ -4,54 +4,17 @@
 
 use std::collections::HashMap;
 
+use super::scalar::Scalar;
+
 /// A primitive or nested field type.
 #[derive(Debug, Clone, PartialEq)]
 pub enum FieldType {
     /// bool, byte, char, int8…uint64, float32, float64.
-    Primitive(Primitive),
+    Primitive(Scalar),
     /// string / wstring (bounded or not).
     String,
     /// A nested message type, fully qualified `pkg/msg/Type`.
     Message(String),
-}
-
-/// Primitive types with their CDR size in bytes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Primitive {
-    /// bool (1 byte).
-    Bool,
-    /// int8 (1 byte).
-    I8,
-    /// uint8, byte, char (1 byte).
-    U8,
-    /// int16.
-    I16,
-    /// uint16.
-    U16,
-    /// int32.
-    I32,
-    /// uint32.
-    U32,
-    /// int64.
-    I64,
-    /// uint64.
-    U64,
-    /// float32.
-    F32,
-    /// float64.
-    F64,
-}
-
-impl Primitive {
-    /// Size and CDR alignment, bytes.
-    pub fn size(self) -> usize {
-        match self {
-            Self::Bool | Self::I8 | Self::U8 => 1,
-            Self::I16 | Self::U16 => 2,
-            Self::I32 | Self::U32 | Self::F32 => 4,
-            Self::I64 | Self::U64 | Self::F64 => 8,
-        }
-    }
 }
 
 /// Array shape of a field.
@@ -98,7 +61,7 @@ fn qualify(name: &str, pkg: &str) -> String {
 }
 
 fn primitive(name: &str) -> Option<FieldType> {
-    use Primitive::*;
+    use Scalar::*;
     let p = match name {
         "bool" => Bool,
         "int8" => I8,
@@ -197,12 +160,12 @@ pub fn parse_schema(name: &str, text: &str) -> Result<Schema, String> {
             vec![
                 Field {
                     name: "sec".into(),
-                    ty: FieldType::Primitive(Primitive::I32),
+                    ty: FieldType::Primitive(Scalar::I32),
                     shape: Shape::Scalar,
                 },
                 Field {
                     name: "nanosec".into(),
-                    ty: FieldType::Primitive(Primitive::U32),
+                    ty: FieldType::Primitive(Scalar::U32),
                     shape: Shape::Scalar,
                 },
             ]

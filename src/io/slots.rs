@@ -129,11 +129,6 @@ impl SlotLayout {
         self.signal.len()
     }
 
-    /// True when no slot is mapped.
-    pub fn is_empty(&self) -> bool {
-        self.signal.is_empty()
-    }
-
     /// True when `signal` is mapped.
     pub fn has(&self, signal: Signal) -> bool {
         self.start[signal_index(signal)].is_some()

@@ -90,15 +90,12 @@ pub use workspace::Workspace;
 
 /// A quadrotor × (arm 0.25 m, R = 0.1 m, h = 0.05 m, 1 kg) for the model's unit tests.
 #[cfg(test)]
-fn test_quad() -> crate::vehicle::Vehicle {
-    use crate::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+pub(crate) fn test_quad() -> crate::vehicle::Vehicle {
+    use crate::vehicle::{MassAndRotorProperties, Preset, Vehicle, test_props};
     let props = MassAndRotorProperties {
-        mass: 1.0,
-        inertia: [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.02]],
         air_density: 1.2,
-        rotor_radius: 0.1,
         hub_height: 0.05,
-        rotor_inertia: 0.0,
+        ..test_props()
     };
     Vehicle::preset("q", Preset::QuadX, 0.25, 1.0, props).unwrap()
 }

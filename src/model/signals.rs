@@ -42,7 +42,7 @@ pub enum Signal {
     /// Rate of the virtual rudder δ̇r = M_ix,r Ω̇, rad/s².
     DrDot,
     /// Second rate of the virtual rudder δ̈r = M_ix,r Ω̈, rad/s³ (Ω̈ derived by the fit
-    /// pipeline, [`crate::io::derive::rotor_jerk`]).
+    /// pipeline, `io`'s `rotor_jerk`).
     DrDDot,
     /// Rate δ̇ = M_ix,row Ω̇ of the virtual actuator of one row of Eq. 20 (0 δt, 1 δa,
     /// 2 δe, 3 δr): a rotor-local sum Σ w_i Ω̇_i, in that actuator's unit per second.

@@ -7,8 +7,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::FitRequest;
 use crate::error::Error;
 use crate::identified::IdentifiedModel;
-use crate::io::derive::{JerkScratch, rotor_jerk};
 use crate::io::{self, DeriveOptions, Mapping, ReadOptions};
+use crate::io::{JerkScratch, rotor_jerk};
 use crate::sample::SampleChunk;
 use crate::slow::SlowThrust;
 

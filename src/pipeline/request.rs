@@ -107,7 +107,7 @@ pub(super) fn no_holdout(req: &FitRequest, log: &LogStats) -> Error {
     };
     let samples = log.fit.count() + log.held_out.count();
     let consequence = ", so no sample falls in a held-out segment";
-    if let Some(text) = io::validate::time_unit_suspect(median_step, span, samples, consequence) {
+    if let Some(text) = io::time_unit_suspect(median_step, span, samples, consequence) {
         return io::IoError::new(
             &s.file,
             io::Location::File,

@@ -108,7 +108,7 @@ pub fn px4_rpm(i: usize, t_us: u64) -> f64 {
 /// 10 Hz, an unmapped cpuload topic, info, CA_ROTOR parameters (quad x, 0.2 m), a log
 /// string; trailing padding is left out of the data, as PX4 does.
 pub fn px4_like_log(opts: Px4Log) -> Vec<u8> {
-    use mrsysid::io::ulog_write::UlogWriter;
+    use mrsysid::io::fixtures::ulog::UlogWriter;
     let mut w = UlogWriter::new(123);
     w.flag_bits([0; 8], [0; 8], [0; 3]);
     w.info("sys_name", "PX4");

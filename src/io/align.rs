@@ -1,0 +1,397 @@
+//! Time alignment of asynchronous topics (MCAP and ULog): every message of the time-base
+//! topic makes one sample; each other mapped topic gives its values at that time, taken
+//! from a message at exactly that time or linearly interpolated between the two messages
+//! around it when they are at most `gap` seconds apart and no logger dropout lies between
+//! them. Otherwise the sample is not aligned (the reader drops and counts it, never
+//! bridging the hole). A base message after a dropout starts a new segment.
+//!
+//! Memory is bounded: a topic's queue holds the messages read ahead of the base time,
+//! and a base message waits only until every topic has a message at or after it, or
+//! messages more than `gap` later have been read, or the file ended.
+
+use std::collections::VecDeque;
+
+use super::error::{ErrorKind, IoError, Location, field, key};
+use super::mapping::Mapping;
+use super::row_source::RowSource;
+use super::summary::Dropout;
+use super::units::{Dimension, unit_for};
+
+/// A source of topic messages aligned by an [`Aligner`] (MCAP, ULog): a [`RowSource`]
+/// whose rows are the aligned samples.
+pub trait TopicSource {
+    /// The name of the largest interpolated step in messages, and what else can leave a
+    /// sample unaligned (words appended to the message).
+    const GAP_WORDS: (&'static str, &'static str);
+    /// The aligner the source pushes its messages into.
+    fn aligner(&mut self) -> &mut Aligner;
+    /// Reads messages until one of a mapped topic was pushed: false at the end of the file.
+    fn read_message(&mut self) -> Result<bool, IoError>;
+    /// At the end of the file: the error naming a mapped topic that gave no message.
+    fn missing_topic(&self) -> Option<IoError>;
+    /// Logger dropouts read so far.
+    fn dropouts(&self) -> &[Dropout] {
+        &[]
+    }
+}
+
+impl<S: TopicSource> RowSource for S {
+    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
+        while !self.aligner().ready() {
+            if !self.read_message()? {
+                self.aligner().finish();
+                if let Some(e) = self.missing_topic() {
+                    return Err(e);
+                }
+            }
+        }
+        let align = self.aligner();
+        match align.next(raw) {
+            None => Ok(None),
+            Some(Ok((loc, t))) => Ok(Some((loc, Some(t)))),
+            Some(Err(u)) => {
+                let (name, also) = S::GAP_WORDS;
+                Err(IoError::new(
+                    &align.file,
+                    u.loc,
+                    field(&align.queues[u.topic].key),
+                    ErrorKind::NotAligned(format!(
+                        "no messages within {name} = {} s around t = {} s{also}",
+                        align.gap, u.t
+                    )),
+                ))
+            }
+        }
+    }
+
+    fn take_segment_break(&mut self) -> bool {
+        self.aligner().take_segment_break()
+    }
+
+    fn dropouts(&self) -> &[Dropout] {
+        TopicSource::dropouts(self)
+    }
+}
+
+/// The index of the time-base topic among the mapped topics `keys` of `file`: the
+/// mapping's `[mcap] time_base`, else the topic of the body rates.
+pub fn base_topic<'a>(
+    mapping: &Mapping,
+    keys: impl IntoIterator<Item = &'a str>,
+    file: &str,
+) -> Result<usize, IoError> {
+    let base_name = mapping
+        .mcap
+        .time_base
+        .clone()
+        .or_else(|| mapping.signals.rates.as_ref().and_then(|r| r.topic.clone()))
+        .unwrap_or_default();
+    keys.into_iter()
+        .position(|k| k == base_name)
+        .ok_or_else(|| {
+            IoError::new(
+                file,
+                Location::File,
+                key("mcap.time_base"),
+                ErrorKind::Mapping(format!("time base topic {base_name:?} maps no signal")),
+            )
+        })
+}
+
+/// The time field of topic `topic` named in the mapping's `[mcap.topic_time]`, parsed
+/// by the format's `parse_path`, and its factor to seconds; `None` when the table does
+/// not name the topic.
+pub fn topic_time<T>(
+    mapping: &Mapping,
+    topic: &str,
+    file: &str,
+    parse_path: impl Fn(&str) -> Result<T, String>,
+) -> Result<Option<(T, f64)>, IoError> {
+    let Some(tt) = mapping.mcap.topic_time.get(topic) else {
+        return Ok(None);
+    };
+    let bad = |m: String| {
+        IoError::new(
+            file,
+            Location::File,
+            key(&format!("mcap.topic_time.{topic}")),
+            ErrorKind::Mapping(m),
+        )
+    };
+    let path = parse_path(&tt.field).map_err(bad)?;
+    let factor = match &tt.unit {
+        Some(u) => {
+            unit_for(u, None, Dimension::Time, "time")
+                .map_err(bad)?
+                .to_si
+        }
+        None => 1.0,
+    };
+    Ok(Some((path, factor)))
+}
+
+/// One decoded message of a mapped topic, waiting for alignment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Message {
+    /// Time, s.
+    pub t: f64,
+    /// Values of the topic's mapped fields, in the order of its slots.
+    pub values: Vec<f64>,
+    /// Where the message is in the file.
+    pub loc: Location,
+    /// Logger dropouts before it: messages of different epochs are never interpolated
+    /// between.
+    pub epoch: u32,
+}
+
+/// A base sample a topic could not be aligned to: no message at time `t` (s) and none
+/// close enough around it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unaligned {
+    /// Index of the topic.
+    pub topic: usize,
+    /// The base time, s.
+    pub t: f64,
+    /// Where the base message is in the file.
+    pub loc: Location,
+}
+
+/// One mapped topic: its key, its slots and its messages not consumed yet.
+#[derive(Debug)]
+struct Queue {
+    /// The topic as the mapping names it.
+    key: String,
+    slots: Vec<usize>,
+    messages: VecDeque<Message>,
+}
+
+/// Aligns the topics' messages on the time-base topic; see the module docs.
+#[derive(Debug)]
+pub struct Aligner {
+    /// File name for messages.
+    file: String,
+    queues: Vec<Queue>,
+    base: usize,
+    gap: f64,
+    /// Latest finite message time pushed, s (−∞ before any).
+    latest: f64,
+    last_base_epoch: Option<u32>,
+    segment_break: bool,
+    eof: bool,
+}
+
+impl Aligner {
+    /// The aligner of `file`'s topics: topic `j`, named `topics[j].0` in the mapping,
+    /// fills the slots `topics[j].1`; topic `base` is the time base; messages at most
+    /// `gap` seconds apart are interpolated between.
+    pub fn new(file: &str, topics: Vec<(String, Vec<usize>)>, base: usize, gap: f64) -> Self {
+        Self {
+            file: file.to_string(),
+            queues: topics
+                .into_iter()
+                .map(|(key, slots)| Queue {
+                    key,
+                    slots,
+                    messages: VecDeque::new(),
+                })
+                .collect(),
+            base,
+            gap,
+            latest: f64::NEG_INFINITY,
+            last_base_epoch: None,
+            segment_break: false,
+            eof: false,
+        }
+    }
+
+    /// Largest time step interpolated over, s.
+    pub fn gap(&self) -> f64 {
+        self.gap
+    }
+
+    /// Latest finite message time pushed, s (−∞ before any).
+    pub fn latest_time(&self) -> f64 {
+        self.latest
+    }
+
+    /// Queues a message of topic `topic`.
+    pub fn push(&mut self, topic: usize, message: Message) {
+        if message.t.is_finite() {
+            self.latest = self.latest.max(message.t);
+        }
+        self.queues[topic].messages.push_back(message);
+    }
+
+    /// The file has no more messages.
+    pub fn finish(&mut self) {
+        self.eof = true;
+    }
+
+    /// True when the next base message can be aligned (or the file ended); otherwise
+    /// more messages must be read.
+    pub fn ready(&self) -> bool {
+        match self.queues[self.base].messages.front() {
+            Some(m) => {
+                let tb = m.t;
+                (0..self.queues.len()).all(|j| j == self.base || self.settled(j, tb))
+            }
+            None => self.eof,
+        }
+    }
+
+    /// True when topic `j` can no longer get a message that brackets base time `tb`.
+    fn settled(&self, j: usize, tb: f64) -> bool {
+        self.eof
+            || self.queues[j].messages.back().is_some_and(|m| m.t >= tb)
+            || self.latest > tb + self.gap
+    }
+
+    /// Aligns the next base message into `raw` (call when [`Aligner::ready`]): its
+    /// location and time (s); `None` when no base message is left.
+    pub fn next(&mut self, raw: &mut [f64]) -> Option<Result<(Location, f64), Unaligned>> {
+        let base = self.queues[self.base].messages.pop_front()?;
+        if self.last_base_epoch.is_some_and(|e| e != base.epoch) {
+            self.segment_break = true;
+        }
+        self.last_base_epoch = Some(base.epoch);
+        for (slot, v) in self.queues[self.base].slots.iter().zip(&base.values) {
+            raw[*slot] = *v;
+        }
+        let tb = base.t;
+        for (j, queue) in self.queues.iter_mut().enumerate() {
+            if j == self.base {
+                continue;
+            }
+            let q = &mut queue.messages;
+            while q.len() >= 2 && q[1].t <= tb {
+                q.pop_front();
+            }
+            let slots = queue.slots.iter().copied();
+            let aligned = match (q.front(), q.get(1)) {
+                (Some(a), _) if a.t == tb => {
+                    for (s, v) in slots.zip(&a.values) {
+                        raw[s] = *v;
+                    }
+                    true
+                }
+                (Some(a), Some(b))
+                    if a.t < tb && b.t > tb && b.t - a.t <= self.gap && a.epoch == b.epoch =>
+                {
+                    let w = (tb - a.t) / (b.t - a.t);
+                    for (s, (x, y)) in slots.zip(a.values.iter().zip(&b.values)) {
+                        raw[s] = x + w * (y - x);
+                    }
+                    true
+                }
+                _ => false,
+            };
+            if !aligned {
+                return Some(Err(Unaligned {
+                    topic: j,
+                    t: tb,
+                    loc: base.loc,
+                }));
+            }
+        }
+        Some(Ok((base.loc, tb)))
+    }
+
+    /// True (once) when the base message returned last follows a logger dropout.
+    pub fn take_segment_break(&mut self) -> bool {
+        std::mem::take(&mut self.segment_break)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn message(t: f64, value: f64, epoch: u32) -> Message {
+        Message {
+            t,
+            values: vec![value],
+            loc: Location::Record(0),
+            epoch,
+        }
+    }
+
+    /// Base at 0.1 s steps, a second topic at 0.25 s steps with value 10 t: exact where
+    /// the times meet, linear in between (10 t_b to rounding, 1e-12), refused across a
+    /// dropout (epoch 0 → 1).
+    #[test]
+    fn interpolates_between_bracketing_messages_of_one_epoch() {
+        let mut a = Aligner::new(
+            "f",
+            vec![("b".into(), vec![0]), ("o".into(), vec![1])],
+            0,
+            0.3,
+        );
+        for k in 0..6 {
+            let t = k as f64 * 0.1;
+            a.push(0, message(t, -t, 0));
+        }
+        a.push(1, message(0.0, 0.0, 0));
+        a.push(1, message(0.25, 2.5, 0));
+        a.push(1, message(0.5, 5.0, 1));
+        a.finish();
+        let mut raw = [0.0; 2];
+        let mut got = Vec::new();
+        while let Some(r) = a.next(&mut raw) {
+            got.push(r.map(|(_, t)| (t, raw[0], raw[1])));
+        }
+        let ok = |t: f64| Ok((t, -t, 10.0 * t));
+        assert_eq!(got[0], ok(0.0));
+        let (t, base, v) = got[2].unwrap();
+        assert_eq!((t, base), (0.2, -0.2));
+        assert!((v - 2.0).abs() < 1e-12, "{v}");
+        // 0.3 and 0.4 lie between 0.25 (epoch 0) and 0.5 (epoch 1): not aligned.
+        for (k, t) in [(3, 0.30000000000000004), (4, 0.4)] {
+            assert_eq!(
+                got[k],
+                Err(Unaligned {
+                    topic: 1,
+                    t,
+                    loc: Location::Record(0)
+                })
+            );
+        }
+        assert_eq!(got[5], ok(0.5));
+        assert_eq!(got.len(), 6);
+    }
+
+    /// A base message waits until the other topic has a message at or after it, or one
+    /// more than `gap` later was read; a new epoch on the base topic breaks the segment.
+    #[test]
+    fn waits_for_bracketing_messages_and_breaks_segments_at_dropouts() {
+        let mut a = Aligner::new(
+            "f",
+            vec![("b".into(), vec![0]), ("o".into(), vec![1])],
+            0,
+            0.3,
+        );
+        assert!(!a.ready());
+        a.push(0, message(1.0, 1.0, 0));
+        assert!(!a.ready());
+        a.push(1, message(0.9, 9.0, 0));
+        assert!(!a.ready());
+        a.push(0, message(1.31, 1.31, 0));
+        assert!(a.ready(), "a message more than 0.3 s after 1.0 s was read");
+        a.push(1, message(1.2, 12.0, 0));
+        let mut raw = [0.0; 2];
+        assert!(a.next(&mut raw).unwrap().is_ok());
+        assert!((raw[1] - 10.0).abs() < 1e-12);
+        assert!(!a.take_segment_break());
+        a.push(0, message(1.5, 1.5, 1));
+        a.push(1, message(1.5, 15.0, 1));
+        assert!(
+            a.next(&mut raw).unwrap().is_err(),
+            "1.2 s and 1.5 s lie across a dropout"
+        );
+        assert!(!a.take_segment_break());
+        assert_eq!(a.next(&mut raw), Some(Ok((Location::Record(0), 1.5))));
+        assert!(a.take_segment_break() && !a.take_segment_break());
+        assert_eq!(a.latest_time(), 1.5);
+        a.finish();
+        assert!(a.ready() && a.next(&mut raw).is_none());
+    }
+}

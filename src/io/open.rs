@@ -1,0 +1,150 @@
+//! [`open_log`]: the format chosen by the file's magic bytes, the options checked, the
+//! source opened and the [`LogReader`] built over it.
+
+use std::io::Read;
+use std::path::Path;
+
+use super::MAX_ROTORS;
+use super::contract_csv::CsvSource;
+use super::error::{self, ErrorKind, IoError, Location};
+use super::mapping::Mapping;
+use super::mcap_read::McapSource;
+use super::options::ReadOptions;
+use super::reader::LogReader;
+use super::row_source::RowSource;
+use super::ulog::{self, UlogSource};
+use crate::vehicle::Vehicle;
+
+/// Opens a CSV (contract or mapped), MCAP or ULog log for streaming; the format is
+/// chosen by the MCAP or ULog magic bytes. `mapping` is required for MCAP and ULog and
+/// for CSV files that do not follow the contract.
+pub fn open_log(
+    path: &Path,
+    vehicle: &Vehicle,
+    mapping: Option<&Mapping>,
+    options: &ReadOptions,
+) -> Result<LogReader, IoError> {
+    let file = error::display_name(path);
+    let rotors = vehicle.rotor_count();
+    if rotors > MAX_ROTORS {
+        return Err(IoError::new(
+            &file,
+            Location::File,
+            None,
+            ErrorKind::Mapping(format!(
+                "vehicle has {rotors} rotors, at most {MAX_ROTORS} supported"
+            )),
+        ));
+    }
+    let mut opts = *options;
+    if let Some(d) = mapping.and_then(|m| m.derive) {
+        opts.derive = d;
+    }
+    opts.derive.check().map_err(|m| {
+        IoError::new(
+            &file,
+            Location::File,
+            error::key("derive"),
+            ErrorKind::Mapping(m),
+        )
+    })?;
+    if opts.max_gap.is_nan() || opts.max_gap <= 0.0 {
+        return Err(IoError::new(
+            &file,
+            Location::File,
+            None,
+            ErrorKind::Mapping(format!("max_gap = {} s must be positive", opts.max_gap)),
+        ));
+    }
+    let magic = sniff(path)
+        .map_err(|e| IoError::new(&file, Location::File, None, ErrorKind::Read(e.to_string())))?;
+    if magic != Magic::Csv {
+        let what = if magic == Magic::Mcap {
+            "an MCAP"
+        } else {
+            "a ULog"
+        };
+        let mapping = mapping.ok_or_else(|| {
+            IoError::new(
+                &file,
+                Location::File,
+                None,
+                ErrorKind::Mapping(format!(
+                    "{what} log needs a mapping file naming topics and fields"
+                )),
+            )
+        })?;
+        let align_gap = mapping.mcap.align_gap.unwrap_or(opts.max_gap);
+        if align_gap.is_nan() || align_gap <= 0.0 {
+            return Err(IoError::new(
+                &file,
+                Location::File,
+                error::key("mcap.align_gap"),
+                ErrorKind::Mapping(format!("align_gap = {align_gap} s must be positive")),
+            ));
+        }
+        let (source, layout): (Box<dyn RowSource>, _) = if magic == Magic::Mcap {
+            let (s, l) = McapSource::open(path, &file, mapping, rotors, align_gap)?;
+            (Box::new(s), l)
+        } else {
+            let (s, l) = UlogSource::open(path, &file, mapping, rotors, align_gap)?;
+            (Box::new(s), l)
+        };
+        return Ok(LogReader::new(
+            source, layout, mapping, vehicle, opts, &file, true,
+        ));
+    }
+    let (source, resolved, layout) = CsvSource::open(
+        path,
+        &file,
+        mapping,
+        rotors,
+        opts.parse_threads,
+        opts.range_bytes,
+    )?;
+    Ok(LogReader::new(
+        Box::new(source),
+        layout,
+        &resolved,
+        vehicle,
+        opts,
+        &file,
+        false,
+    ))
+}
+
+/// A log's format, from its first bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Magic {
+    Csv,
+    Mcap,
+    Ulog,
+}
+
+/// The format of the file by its magic bytes (MCAP, ULog), else CSV; a `.ulg` file is
+/// ULog whatever its first bytes (so a corrupt one is told so).
+fn sniff(path: &Path) -> std::io::Result<Magic> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ulg"))
+    {
+        return Ok(Magic::Ulog);
+    }
+    let mut magic = [0u8; 8];
+    let mut f = std::fs::File::open(path)?;
+    let mut n = 0;
+    while n < 8 {
+        let k = f.read(&mut magic[n..])?;
+        if k == 0 {
+            break;
+        }
+        n += k;
+    }
+    Ok(if n >= 5 && &magic[..5] == b"\x89MCAP" {
+        Magic::Mcap
+    } else if n >= 7 && magic[..7] == ulog::MAGIC {
+        Magic::Ulog
+    } else {
+        Magic::Csv
+    })
+}

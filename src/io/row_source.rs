@@ -1,0 +1,23 @@
+//! The source of raw samples the [`super::LogReader`] converts: CSV rows, or the
+//! time-aligned messages of MCAP and ULog topics, in the slot layout of the mapping.
+
+use super::error::{IoError, Location};
+use super::summary::Dropout;
+
+/// The source of raw samples in slot layout (CSV rows, aligned MCAP messages).
+pub(crate) trait RowSource {
+    /// Fills `raw` with the next sample's raw values (source units and axes); returns its
+    /// location and, when the source supplies it outside the slots (MCAP log time, or
+    /// the aligned base time), its time in seconds; `None` at end of file. After a
+    /// sample-level error the source is ready for the next sample.
+    fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError>;
+    /// True (once) when the sample returned last follows a logger dropout and must start
+    /// a new segment whatever the time step.
+    fn take_segment_break(&mut self) -> bool {
+        false
+    }
+    /// Logger dropouts read so far.
+    fn dropouts(&self) -> &[Dropout] {
+        &[]
+    }
+}
