@@ -250,18 +250,23 @@ impl AxisRemainder {
             .map(|(s, l, r)| format!("{s} {r:+.2} at {l:+.0} ms"))
             .collect::<Vec<_>>()
             .join(", ");
+        let widest = REMAINDER_LAGS_MS[REMAINDER_LAGS_MS.len() - 1];
         let reading = if rho.abs() < 0.1 {
             "little rotor-driven structure is left (noise, or states the model does not use)"
                 .to_string()
+        } else if lag.abs() >= widest {
+            format!(
+                "it peaks at the edge of the ±{widest:.0} ms window: slow structure (below a few Hz) the model lacks, not a lag"
+            )
+        } else if lag.abs() <= 5.0 {
+            format!("the model's gain on {signal} is off")
         } else if lag > 0.0 {
             format!("the load follows {signal} about {lag:.0} ms later than the model has it")
-        } else if lag < 0.0 {
+        } else {
             format!(
                 "the load leads the logged {signal} by about {:.0} ms (a rotor-speed measurement lag, or the controller acting on the measured rates)",
                 -lag
             )
-        } else {
-            format!("the model's gain on {signal} is off")
         };
         format!(
             "{} residual, peak correlation with the rotor signals over ±100 ms: {listed}: {reading}",
