@@ -48,7 +48,7 @@ pub struct Report {
     /// The same on the validation data (the validation logs, else cross-validated).
     pub validation: Vec<AxisRow>,
     /// Cross-validation of the Eq. 22 model: each fold's held-out metrics (a log
-    /// predicted by the model fitted on the others, or the hold-out segments), then all
+    /// predicted by the model fitted on the others, or a single log's blocks), then all
     /// folds pooled.
     pub cross_validation: Vec<FoldRow>,
     /// FSOA table per axis (seed Tables 2–3).
@@ -67,7 +67,7 @@ pub struct Report {
 /// Held-out metrics of one cross-validation fold (or of all pooled).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FoldRow {
-    /// The held-out data: a log's file name, `hold-out segments`, or `pooled`.
+    /// The held-out data: a log's file name, a block of a single log, or `pooled`.
     pub name: String,
     /// Metrics per axis.
     pub axes: Vec<AxisRow>,
@@ -76,7 +76,7 @@ pub struct FoldRow {
 /// Held-out metrics before and after the diagnosis on one data set.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BeforeAfterRow {
-    /// The held-out data: a log's file name, `hold-out segments`, `pooled`, or
+    /// The held-out data: a log's file name, a block of a single log, `pooled`, or
     /// `validation logs`.
     pub name: String,
     /// Eq. 22 model, per axis.

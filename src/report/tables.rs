@@ -260,10 +260,13 @@ fn fit_table(out: &mut String, r: &Report) {
         );
     }
     if r.cross_validation.len() > 2 {
-        let _ = writeln!(
-            out,
-            "  cross-validated R2 [%] (each log predicted by the model fitted on the others)"
-        );
+        // A single log's folds are its blocks (`block k/K (a-b s)`), several logs' the logs.
+        let held_out = if r.cross_validation[0].name.starts_with("block ") {
+            "each block predicted by the model fitted on the rest of the log less its guards"
+        } else {
+            "each log predicted by the model fitted on the others"
+        };
+        let _ = writeln!(out, "  cross-validated R2 [%] ({held_out})");
         r2_rows(
             out,
             r.cross_validation
