@@ -2,7 +2,7 @@
 //! statistics (a single fit log's to its time units), the thinned screening samples
 //! kept, the parsed chunks spilled for the second pass.
 
-use super::blocks::Units;
+use super::blocks::{BlockPlan, Units};
 use super::split::Role;
 use super::stream::stream_log;
 use super::{FitRequest, accumulate_error};
@@ -43,12 +43,14 @@ impl LogStats {
 }
 
 /// What the second pass needs to know of a log from the first, in job order.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(super) struct LogCounts {
     /// Samples routed to fit and to validation (for plot decimation).
     pub(super) kinds: [u64; 2],
     /// Chunks the log is read in (the same in both passes).
     pub(super) chunks: usize,
+    /// The blocks of a single fit log.
+    pub(super) plan: Option<BlockPlan>,
 }
 
 /// Reads one log, routing each sample to the fit or validation statistics (a single fit

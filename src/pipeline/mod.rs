@@ -77,11 +77,12 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     for s in &per_log[n_fit..] {
         merge(&mut validation_stats, &s.held_out)?;
     }
-    let counts: Vec<LogCounts> = per_log
+    let mut counts: Vec<LogCounts> = per_log
         .iter()
         .map(|s| LogCounts {
             kinds: s.kinds(),
             chunks: s.chunks,
+            plan: None,
         })
         .collect();
     if counts[..n_fit].iter().all(|c| c.kinds[0] == 0) {
@@ -122,6 +123,9 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
         (cv.pooled_metrics(), folds.test_samples())
     };
     let validation_source = validation_source(req, plan.as_ref());
+    if let [single] = &mut counts[..n_fit] {
+        single.plan = plan;
+    }
     let mut outcome = FitOutcome {
         fit,
         fit_stats,
@@ -143,7 +147,6 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
             &jobs,
             &spills,
             &counts,
-            plan.as_ref(),
             signals,
             screening.samples(),
             &mut outcome,

@@ -133,12 +133,12 @@ pub(super) fn second_pass(
     jobs: &[(LogSource, Role)],
     spills: &[Option<Spill>],
     counts: &[LogCounts],
-    plan: Option<&BlockPlan>,
     signals: Option<Signals>,
     screening: &SampleChunk,
     out: &mut FitOutcome,
 ) -> Result<(), Error> {
     let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
+    let plan = counts.iter().find_map(|c| c.plan.as_ref());
     let ctx = PassContext {
         req,
         theta: &out.fit.mmr.theta,
