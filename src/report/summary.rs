@@ -117,6 +117,10 @@ pub struct DiagnosisReport {
     /// The search stopped at its effect limit with candidates left.
     #[serde(default)]
     pub stopped_at_limit: bool,
+    /// Axes on which the final model predicts the held-out data (all folds pooled) worse
+    /// than the Eq. 22 model (`Diagnosis::worse_than_base`); absent when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub worse_than_base: Vec<Axis>,
 }
 
 /// An effect (candidate) with its estimates.
@@ -276,6 +280,7 @@ impl From<&Diagnosis> for DiagnosisReport {
                 .collect(),
             findings: d.findings.clone(),
             stopped_at_limit: d.stopped_at_limit,
+            worse_than_base: d.worse_than_base(),
         }
     }
 }

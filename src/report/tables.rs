@@ -148,6 +148,21 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
             100.0 * a.r2
         );
     }
+    for axis in &d.worse_than_base {
+        let at = |rows: &[AxisRow]| {
+            rows.iter()
+                .find(|r| r.axis == *axis)
+                .map_or(f64::NAN, |r| r.r2)
+        };
+        let _ = writeln!(
+            out,
+            "  worse than the Eq. 22 model on the held-out {} data: R2 {:.1}% -> {:.1}% (the \
+             terms added and left out pay on all axes together)",
+            axis.name(),
+            100.0 * at(&d.before),
+            100.0 * at(&d.after)
+        );
+    }
     let _ = writeln!(out, "  R2 [%] per held-out data, before -> after");
     let rows: Vec<(String, &Vec<AxisRow>)> = d
         .folds
