@@ -9,7 +9,7 @@
 //!
 //! Sweeps are diagnosed with [`diagnose_chunks`] (3000 Latin-hypercube points, the last
 //! 600 held out); flights (30–60 s at 100 Hz, sensor noise) through the builder, with the
-//! default 20 % hold-out and the coloured-residual correction.
+//! default cross-validation on contiguous blocks and the coloured-residual correction.
 
 use std::path::Path;
 

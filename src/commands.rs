@@ -134,7 +134,7 @@ pub struct FitCommand {
     pub options: ModelOptions,
     pub drop_invalid: bool,
     pub validate: Vec<PathBuf>,
-    pub holdout_segment: f64,
+    pub holdout: Holdout,
     pub json: Option<PathBuf>,
     pub model_out: Option<PathBuf>,
     pub plots: Option<PathBuf>,
@@ -202,10 +202,7 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
         .model_options(cmd.options)
         .logs(cmd.logs.iter().cloned())
         .read_options(read_options(cmd.drop_invalid))
-        .holdout(Holdout {
-            segment_seconds: cmd.holdout_segment,
-            ..Holdout::default()
-        })
+        .holdout(cmd.holdout)
         .diagnose(cmd.diagnose);
     for log in &cmd.validate {
         job = job.validate(log.clone());

@@ -62,7 +62,7 @@ impl Error {
         match self {
             Self::Estimate(_) | Self::Diagnose(_) => 1,
             Self::Request(RequestError::NoSamples) => 1,
-            Self::Request(e @ RequestError::HoldoutTooShort { .. }) if e.log_too_short() => 1,
+            Self::Request(RequestError::HoldoutTooShort { .. }) => 1,
             Self::Input(e) if matches!(e.kind, ErrorKind::TooShort(_)) => 1,
             _ => 2,
         }
@@ -78,9 +78,10 @@ pub enum RequestError {
     /// The fit logs hold no sample.
     #[error("no samples to fit")]
     NoSamples,
-    /// A single fit log none of whose samples falls in a held-out segment: shorter than
-    /// the first held-out segment's start, or sampled more coarsely than the segments.
-    #[error("{}", holdout_text(log, *samples, *span, *median_step, *segment_seconds, *every))]
+    /// A single fit log too short to be cut into its cross-validation blocks: it spans
+    /// less than a guard per block, or has fewer samples than blocks, or some block's
+    /// fold would have no sample to fit.
+    #[error("{}", holdout_text(log, *samples, *span, *blocks, *guard_seconds))]
     HoldoutTooShort {
         /// The log (file name or memory log name).
         log: String,
@@ -90,10 +91,10 @@ pub enum RequestError {
         span: f64,
         /// Median step between its samples' times, s (`None` when not known).
         median_step: Option<f64>,
-        /// Segment length, s.
-        segment_seconds: f64,
-        /// Every `every`-th segment is held out.
-        every: usize,
+        /// Contiguous blocks it is cut into.
+        blocks: usize,
+        /// Guard on each side of a held-out block, s.
+        guard_seconds: f64,
     },
     /// The same log given twice as a fit log: the same file, a file of identical
     /// content, or logs in memory holding the same samples.
@@ -113,15 +114,16 @@ pub enum RequestError {
         /// The fit log it is.
         fit: String,
     },
-    /// Hold-out segments that are not a positive length, or a cycle of fewer than two.
+    /// Fewer than two cross-validation blocks, or a guard that is not a number of
+    /// seconds ≥ 0.
     #[error(
-        "hold-out segment length {segment_seconds} s must be a positive number of seconds and the cycle ({every}) at least 2"
+        "a single fit log is cross-validated on at least 2 blocks (got {blocks}) with a guard of 0 s or more (got {guard_seconds} s)"
     )]
     InvalidHoldout {
-        /// Segment length given, s.
-        segment_seconds: f64,
-        /// Cycle given.
-        every: usize,
+        /// Blocks given.
+        blocks: usize,
+        /// Guard given, s.
+        guard_seconds: f64,
     },
     /// The model structure was built for another vehicle.
     #[error(
@@ -138,98 +140,40 @@ pub enum RequestError {
     WorkerStopped,
 }
 
-impl RequestError {
-    /// True for [`RequestError::HoldoutTooShort`] of a log shorter than the start of its
-    /// first held-out segment (the data cannot support the fit), false for one long
-    /// enough but sampled more coarsely than its segments (a hold-out that does not fit
-    /// the data) and for every other error.
-    pub fn log_too_short(&self) -> bool {
-        match self {
-            Self::HoldoutTooShort {
-                span,
-                segment_seconds,
-                every,
-                ..
-            } => *span < first_held_out(*segment_seconds, *every),
-            _ => false,
-        }
-    }
-}
-
-/// Start of the first held-out segment of a log, s from its first sample: every
-/// `every`-th segment of `segment_seconds` is held out.
-fn first_held_out(segment_seconds: f64, every: usize) -> f64 {
-    segment_seconds * every.saturating_sub(1) as f64
-}
-
 /// `x` s with at most three decimals.
 fn seconds(x: f64) -> String {
     let text = format!("{x:.3}");
     text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
-/// "1st", "2nd", "3rd", "4th" … of `n`.
-fn ordinal(n: usize) -> String {
-    let suffix = match (n % 10, n % 100) {
-        (1, x) if x != 11 => "st",
-        (2, x) if x != 12 => "nd",
-        (3, x) if x != 13 => "rd",
-        _ => "th",
-    };
-    format!("{n}{suffix}")
-}
-
 /// The text of [`RequestError::HoldoutTooShort`] (its fields).
-fn holdout_text(
-    log: &str,
-    samples: u64,
-    span: f64,
-    median_step: Option<f64>,
-    segment_seconds: f64,
-    every: usize,
-) -> String {
-    let start = first_held_out(segment_seconds, every);
-    let need = seconds(start);
-    let cycle = format!(
-        "every {} {} s segment is held out",
-        ordinal(every),
-        seconds(segment_seconds)
-    );
+fn holdout_text(log: &str, samples: u64, span: f64, blocks: usize, guard_seconds: f64) -> String {
+    let need = seconds(blocks as f64 * guard_seconds);
     let counted = match samples {
         1 => "1 sample".to_string(),
         n => format!("{n} samples"),
     };
-    let span_text = seconds(span);
-    if span < start {
-        // Shorter segments help when each would still hold ten samples or more.
-        let short_segment = span / every as f64;
-        let mut remedies = vec![
-            "a longer log".to_string(),
-            "two or more logs (each is then predicted from the others)".to_string(),
-        ];
-        if span > 0.0 && median_step.is_none_or(|s| short_segment >= 10.0 * s) {
-            remedies.push(format!(
-                "shorter hold-out segments (at most {} s here)",
-                seconds(short_segment)
-            ));
-        }
-        let last = remedies.pop().unwrap_or_default();
-        format!(
-            "{log}: too short to fit and cross-validate: {counted} spanning {span_text} s, \
-             while a single fit log must span at least {need} s ({cycle}, the first from \
-             {need} s on); give {}, or {last}",
-            remedies.join(", ")
-        )
-    } else {
-        let apart = median_step.map_or(String::new(), |s| {
-            format!(", {} s apart (median),", seconds(s))
-        });
-        format!(
-            "{log}: no sample falls in a held-out segment: its {counted} span {span_text} \
-             s{apart} and {cycle}; give hold-out segments longer than the sample interval, \
-             or two or more logs (each is then predicted from the others)"
-        )
+    let mut remedies = vec![
+        "a longer log".to_string(),
+        "two or more logs (each is then predicted from the others)".to_string(),
+    ];
+    let shorter = span / blocks as f64;
+    if guard_seconds > 0.0 && shorter < guard_seconds && samples >= blocks as u64 {
+        remedies.push(format!(
+            "a shorter guard (--holdout-guard, at most {} s here)",
+            seconds(shorter)
+        ));
     }
+    let last = remedies.pop().unwrap_or_default();
+    format!(
+        "{log}: too short to fit and cross-validate: {counted} spanning {} s, while a single \
+         fit log must span at least {need} s and hold {blocks} samples (it is cut into \
+         {blocks} contiguous blocks, each predicted by the model fitted on the others less \
+         {} s on each side of it); give {}, or {last}",
+        seconds(span),
+        seconds(guard_seconds),
+        remedies.join(", ")
+    )
 }
 
 fn duplicate_text(first: &str, second: &str) -> String {
@@ -260,50 +204,38 @@ fn validation_text(validation: &str, fit: &str) -> String {
 mod tests {
     use super::*;
 
-    fn no_holdout(span: f64, median_step: f64, segment_seconds: f64) -> Error {
+    fn too_short(samples: u64, span: f64, guard_seconds: f64) -> Error {
         Error::Request(RequestError::HoldoutTooShort {
             log: "log.csv".into(),
-            samples: 1 + (span / median_step).round() as u64,
+            samples,
             span,
-            median_step: Some(median_step),
-            segment_seconds,
-            every: 5,
+            median_step: Some(0.01),
+            blocks: 5,
+            guard_seconds,
         })
     }
 
-    /// A log shorter than the first held-out segment's start cannot support the fit
-    /// (exit 1); a long one sampled more coarsely than its segments has a hold-out that
-    /// does not fit it (exit 2). Shorter segments are suggested only when each would
-    /// still hold ten samples.
+    /// A single log too short for its blocks cannot support the fit (exit 1); the message
+    /// says what is needed, and suggests a shorter guard only when the log holds a sample
+    /// per block and a guard per block is what it lacks.
     #[test]
     fn hold_out_failures_say_what_is_short() {
-        let short = no_holdout(4.98, 0.01, 2.0);
+        let short = too_short(499, 4.98, 2.0);
         assert_eq!(short.exit_code(), 1);
         assert_eq!(
             short.to_string(),
             "log.csv: too short to fit and cross-validate: 499 samples spanning 4.98 s, while \
-             a single fit log must span at least 8 s (every 5th 2 s segment is held out, the \
-             first from 8 s on); give a longer log, two or more logs (each is then predicted \
-             from the others), or shorter hold-out segments (at most 0.996 s here)"
+             a single fit log must span at least 10 s and hold 5 samples (it is cut into 5 \
+             contiguous blocks, each predicted by the model fitted on the others less 2 s on \
+             each side of it); give a longer log, two or more logs (each is then predicted \
+             from the others), or a shorter guard (--holdout-guard, at most 0.996 s here)"
         );
-        let tiny = no_holdout(0.09, 0.01, 2.0);
+        let tiny = too_short(3, 0.02, 2.0);
         assert!(
             tiny.to_string().ends_with(
                 "give a longer log, or two or more logs (each is then predicted from the others)"
             ),
             "{tiny}"
         );
-        let coarse = no_holdout(20.0, 0.5, 0.1);
-        assert_eq!(coarse.exit_code(), 2);
-        assert_eq!(
-            coarse.to_string(),
-            "log.csv: no sample falls in a held-out segment: its 41 samples span 20 s, 0.5 s \
-             apart (median), and every 5th 0.1 s segment is held out; give hold-out segments \
-             longer than the sample interval, or two or more logs (each is then predicted \
-             from the others)"
-        );
-        assert_eq!(ordinal(2), "2nd");
-        assert_eq!(ordinal(11), "11th");
-        assert_eq!(ordinal(23), "23rd");
     }
 }

@@ -70,7 +70,8 @@ use crate::vehicle::Vehicle;
 ///
 /// Defaults: the Eq. 22 structure of the vehicle with [`ModelOptions::default`], the
 /// diagnosis on, the residual pass on, every available core, contract CSV logs (no
-/// mapping), the hold-out segments of [`Holdout::DEFAULT`] when only one log is fitted.
+/// mapping), the contiguous cross-validation blocks of [`Holdout::DEFAULT`] when only one
+/// log is fitted.
 /// With two or more fit logs every decision is cross-validated by leaving one log out;
 /// logs given to [`Identification::validate`] are only reported on.
 #[derive(Debug, Clone)]

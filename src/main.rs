@@ -91,9 +91,15 @@ struct FitArgs {
     /// effects) sees them (help text: [`validate_help`]).
     #[arg(long, num_args = 1.., help = validate_help())]
     validate: Vec<PathBuf>,
-    /// Hold-out segment length of a single fit log, s.
-    #[arg(long, default_value_t = Holdout::DEFAULT.segment_seconds)]
-    holdout_segment: f64,
+    /// Contiguous blocks a single fit log is cut into to cross-validate it (at least 2):
+    /// each is predicted by the model fitted on the others.
+    #[arg(long, default_value_t = Holdout::DEFAULT.blocks)]
+    holdout_blocks: usize,
+    /// Time on each side of a held-out block of a single fit log that its fold neither
+    /// fits nor scores, s (breaks the serial correlation between fitted and held-out
+    /// samples).
+    #[arg(long, default_value_t = Holdout::DEFAULT.guard_seconds)]
+    holdout_guard: f64,
     /// Write the JSON report here.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -300,9 +306,10 @@ fn validate_help() -> String {
     format!(
         "Logs for the validation figures only: no decision (term selection, candidate \
          effects) sees them. Decisions are cross-validated on the fit logs: with two or \
-         more, each log is predicted by the model fitted on the others; a single log has \
-         every {}th {}-second segment held out",
-        h.every, h.segment_seconds
+         more, each log is predicted by the model fitted on the others; a single log is \
+         cut into {} contiguous blocks, each predicted by the model fitted on the others \
+         less {} s on each side of it",
+        h.blocks, h.guard_seconds
     )
 }
 
@@ -320,7 +327,10 @@ impl FitArgs {
             },
             drop_invalid: m.drop_invalid,
             validate: self.validate.clone(),
-            holdout_segment: self.holdout_segment,
+            holdout: Holdout {
+                blocks: self.holdout_blocks,
+                guard_seconds: self.holdout_guard,
+            },
             json: self.json.clone(),
             model_out: self.model_out.clone(),
             plots: self.plots.clone(),

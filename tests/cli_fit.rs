@@ -130,10 +130,9 @@ fn fit_on_shipped_sweeps_meets_fit_quality_bounds() {
         );
         let v = json(&report);
         assert_eq!(v["schema_version"], 2);
-        assert_eq!(
-            v["samples"].as_u64().unwrap() + v["validation_samples"].as_u64().unwrap(),
-            2000
-        );
+        // Every point is fitted, and held out once by the contiguous blocks.
+        assert_eq!(v["samples"].as_u64().unwrap(), 2000);
+        assert_eq!(v["validation_samples"].as_u64().unwrap(), 2000);
         for (axis, bound) in [
             ("Fx", 0.01),
             ("Fy", 0.01),
@@ -648,4 +647,117 @@ fn diagnosis_on_a_flight_finds_a_rotor_speed_delay_within_one_sample() {
     );
     let tau = effect_parameter(delay, "rotor_speed_delay");
     assert!((tau - 0.02).abs() < 0.01, "{tau}");
+}
+
+/// The first 80 % and the last 20 % of the rows of the shipped log `path` (plain or
+/// gzip CSV), each written with the header as `<name>_80.csv` and `<name>_20.csv`.
+fn cut_80_20(path: &str, name: &str) -> (PathBuf, PathBuf) {
+    use std::io::Read;
+    let bytes = std::fs::read(root().join(path)).unwrap();
+    let mut text = String::new();
+    if path.ends_with(".gz") {
+        flate2::read::MultiGzDecoder::new(&bytes[..])
+            .read_to_string(&mut text)
+            .unwrap();
+    } else {
+        text = String::from_utf8(bytes).unwrap();
+    }
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.collect();
+    let cut = rows.len() * 8 / 10;
+    let write = |part: &[&str], share: &str| {
+        let file = tmp(&format!("{name}_{share}.csv"));
+        std::fs::write(&file, format!("{header}\n{}\n", part.join("\n"))).unwrap();
+        file
+    };
+    (write(&rows[..cut], "80"), write(&rows[cut..], "20"))
+}
+
+/// Fits the first 80 % of the shipped log `path` (vehicle and mapping in `options`) and
+/// scores the last 20 % with `--validate`: R² per axis (Fx … Mz) of the Eq. 22 model and
+/// of the final model there, and the report.
+fn fit_on_the_past(
+    path: &str,
+    name: &str,
+    options: &[&str],
+) -> ([f64; 6], [f64; 6], serde_json::Value) {
+    let (past, future) = cut_80_20(path, name);
+    let report = tmp(&format!("{name}_80_20.json"));
+    let mut args = vec![
+        "fit",
+        past.to_str().unwrap(),
+        "--validate",
+        future.to_str().unwrap(),
+    ];
+    args.extend_from_slice(options);
+    args.extend(["--json", report.to_str().unwrap(), "--quiet"]);
+    let out = mrsysid(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&report);
+    let r2 = |part: &str| -> [f64; 6] {
+        std::array::from_fn(|a| {
+            v["diagnosis"]["validation"][part][a]["r2"]
+                .as_f64()
+                .unwrap()
+        })
+    };
+    (r2("before"), r2("after"), v)
+}
+
+#[test]
+fn a_single_flight_fitted_on_its_first_80_percent_predicts_the_rest_no_worse_than_eq22() {
+    // A single log is cross-validated on contiguous blocks, so the diagnosis's decisions
+    // are scored on data beyond the fitted data. Fitted on the first 80 % of a flight,
+    // the final model predicts the last 20 % (which no decision sees) no worse than the
+    // Eq. 22 model on any axis. Measured, R² [%] Eq. 22 -> final on the last 20 %:
+    // NeuroBEM figure-8 Fx 55.7 -> 57.2, Fy -0.8 -> 5.2, Fz -4.5 -> 58.2, Mx 9.0 -> 45.9,
+    // My 11.9 -> 68.1, Mz -0.3 -> 15.7 (with every 5th 2 s segment held out instead, as
+    // before: Fx 52.0, Fy -2.2 and Mz -2.9, worse than Eq. 22); the shipped simulated
+    // flight Fz 91.0 -> 91.8, every other axis 85.7-99.8 -> 99.5-100. No tolerance on
+    // "no worse" (it is the requirement; the smallest margin is 0.8 points); the gains
+    // where the diagnosis pays are pinned 0.05 below the measured figures.
+    let nb = [
+        "--vehicle",
+        "data/vehicles/neurobem.toml",
+        "--mapping",
+        "examples/neurobem.toml",
+    ];
+    let (before, after, v) = fit_on_the_past(&format!("data/neurobem/{FIGURE8}"), "figure8", &nb);
+    let folds = v["diagnosis"]["folds"].as_array().unwrap();
+    assert_eq!(folds.len(), 5 + 1, "five contiguous blocks, then pooled");
+    assert!(folds[4]["name"].as_str().unwrap().starts_with("block 5/5"));
+    for a in 0..6 {
+        assert!(
+            after[a] >= before[a],
+            "axis {a}: {} -> {}",
+            before[a],
+            after[a]
+        );
+    }
+    assert!(
+        after[2] >= 0.53 && after[4] >= 0.63,
+        "Fz {}, My {}",
+        after[2],
+        after[4]
+    );
+    let quad = ["--vehicle", "data/vehicles/quad_x.toml"];
+    let (before, after, _) = fit_on_the_past(
+        "data/quad_x_flight_quadratic_drag.csv",
+        "drag_flight",
+        &quad,
+    );
+    for a in 0..6 {
+        assert!(
+            after[a] >= before[a],
+            "axis {a}: {} -> {}",
+            before[a],
+            after[a]
+        );
+    }
+    assert!(after[3] >= 0.94, "Mx {}", after[3]);
 }

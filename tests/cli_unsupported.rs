@@ -26,7 +26,8 @@ fn fit(log: &Path) -> Output {
 
 const HEADER: &str = "t,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz";
 
-/// A contract CSV of 2000 rows at 100 Hz (20 s, so the hold-out has samples) whose row k
+/// A contract CSV of 2000 rows at 100 Hz (20 s, long enough for the cross-validation
+/// blocks) whose row k
 /// holds state `state(k)` (u, v, w, p, q, r, Ω₁…Ω₄) and outputs `out(k)` (F, M).
 fn write_log(
     name: &str,

@@ -1,5 +1,5 @@
 //! Closing the loop on noisy simulated flights (sensor noise, coloured residuals, the
-//! default 20 % segment hold-out) through the library's one fit path: an effect that
+//! default cross-validation on contiguous blocks) through the library's one fit path: an effect that
 //! acts in part of the envelope only, and what a clean flight gets.
 
 use std::path::Path;

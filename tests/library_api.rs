@@ -187,8 +187,8 @@ fn requests_that_cannot_be_carried_out_are_refused_before_reading() {
     let e = Identification::new(quad()).run().unwrap_err();
     assert!(matches!(e, Error::Request(RequestError::NoLogs)), "{e:?}");
     let holdout = Holdout {
-        segment_seconds: f64::NAN,
-        every: 5,
+        blocks: 5,
+        guard_seconds: f64::NAN,
     };
     let e = Identification::new(quad())
         .samples("a", flight(300))
@@ -215,7 +215,7 @@ fn requests_that_cannot_be_carried_out_are_refused_before_reading() {
         ),
         "{e:?}"
     );
-    // One log of 3 s: shorter than one hold-out cycle (5 segments of 2 s).
+    // One log of 3 s: shorter than a guard per cross-validation block (5 blocks, 2 s).
     let e = Identification::new(quad())
         .samples("short", flight(300))
         .run()
@@ -275,7 +275,7 @@ fn text_inputs_are_refused_with_their_name() {
 
 #[test]
 fn results_from_memory_match_their_definitions() {
-    // 30 s flight: the first 24 s fit (2 s segments, every 5th held out), the last 6 s
+    // 30 s flight: the first 24 s fit (cross-validated on 5 contiguous blocks), the last 6 s
     // only reported on.
     let all = flight(3000);
     let results = Identification::new(quad())

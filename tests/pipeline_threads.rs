@@ -102,10 +102,11 @@ fn one_two_and_four_threads_give_the_same_report() {
         let many = pipeline::run(&request(&logs, &validate, threads)).expect("fit on threads");
         assert_same_outcome(&one, &many, &format!("{threads} threads"));
     }
-    // One log (2 s segments, every 5th held out), two threads: its reading overlaps the
-    // accumulation.
+    // One log (cross-validated on its contiguous blocks, every sample fitted), two
+    // threads: its reading overlaps the accumulation.
     let single = pipeline::run(&request(&logs[..1], &[], 1)).expect("one log");
-    assert_eq!(single.fit_stats.count(), 901);
+    assert_eq!(single.fit_stats.count(), 1101);
+    assert_eq!(single.cross_validation.0.len(), Holdout::DEFAULT.blocks);
     let overlapped = pipeline::run(&request(&logs[..1], &[], 2)).expect("one log, 2 threads");
     assert_same_outcome(&single, &overlapped, "one log, overlapped reading");
 }
@@ -180,16 +181,14 @@ fn a_log_of_several_second_pass_segments_gives_one_report() {
     // segments.
     let file = long_sweep("long-sweep.csv", 36);
     let one = pipeline::run(&request(&[&file], &[], 1)).expect("one thread");
-    // 2 s hold-out segments of two samples, every 5th held out: 4/5 of 72 000 fit.
-    assert_eq!(one.fit_stats.count(), 57_600);
+    // Every sample is fitted (the contiguous blocks cross-validate it), none is held
+    // out for reporting.
+    assert_eq!(one.fit_stats.count(), 72_000);
     assert!(one.diagnosis.is_some() && one.diagnostics.is_some());
-    assert_decimated(&one.fit_series, 57_600);
-    assert_decimated(&one.validation_series, 14_400);
-    // Plotted time counts from each kind's first sample (t = 0 s and 8 s).
-    assert_eq!(
-        (one.fit_series.t[0], one.validation_series.t[0]),
-        (0.0, 0.0)
-    );
+    assert_decimated(&one.fit_series, 72_000);
+    assert!(one.validation_series.t.is_empty());
+    // Plotted time counts from the first sample.
+    assert_eq!(one.fit_series.t[0], 0.0);
     let two = pipeline::run(&request(&[&file], &[], 2)).expect("two threads");
     assert_same_outcome(&one, &two, "two threads");
     let mut memory = request(&[], &[], 2);

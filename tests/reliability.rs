@@ -462,14 +462,14 @@ fn logs_too_short_to_fit_exit_1_saying_what_is_too_short() {
     let out = mrsysid(&["fit", s(&one), "--vehicle", VEHICLE, "--quiet"]);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
-    for needle in ["one.csv", "1 sample", "at least 8 s"] {
+    for needle in ["one.csv", "1 sample", "at least 10 s"] {
         assert!(err.contains(needle), "missing {needle}: {err}");
     }
     let short = write(&d.join("short.csv"), head(&text, 300));
     let out = mrsysid(&["fit", s(&short), "--vehicle", VEHICLE, "--quiet"]);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
-    for needle in ["short.csv", "300 samples", "2.99 s", "at least 8 s"] {
+    for needle in ["short.csv", "300 samples", "2.99 s", "at least 10 s"] {
         assert!(err.contains(needle), "missing {needle}: {err}");
     }
     // Without moments they are derived from the rates, which one row cannot give.

@@ -1,8 +1,9 @@
 //! Cross-validation from mergeable statistics (beyond the seed): every modelling decision
 //! is scored on data the model was not fitted on. With two or more logs each log is
 //! predicted by the model fitted on the others (leave one log out, Morelli's
-//! "confirmation data" applied to every log in turn); with one log, by the model fitted
-//! on the log's other time segments.
+//! "confirmation data" applied to every log in turn); with one log, each of its contiguous
+//! blocks by the model fitted on the rest of the log less a guard beside the block
+//! ([`Folds::from_folds`]).
 //!
 //! A fold is a pair of [`Accumulator`]s (training and test statistics), so a trial model
 //! is a column subset of each ([`Folds::select`]) and no trial re-reads the data. The
@@ -18,7 +19,7 @@ use crate::stats::{AccumulateError, Accumulator};
 /// Training and test statistics of each fold.
 #[derive(Debug, Clone)]
 pub struct Folds {
-    /// Name of each fold's test data (a log's file name, or "hold-out segments").
+    /// Name of each fold's test data (a log's file name, or a block of a single log).
     pub names: Vec<String>,
     train: Vec<Accumulator>,
     test: Vec<Accumulator>,
@@ -47,13 +48,30 @@ impl Folds {
         })
     }
 
-    /// One fold: train on `train`, test on `test` (the hold-out of a single log).
+    /// One fold: train on `train`, test on `test` (e.g. a sweep's last points).
     pub fn holdout(name: &str, train: Accumulator, test: Accumulator) -> Self {
         Self {
             names: vec![name.to_string()],
             train: vec![train],
             test: vec![test],
         }
+    }
+
+    /// Folds of their own (name, training, test) statistics each: e.g. the contiguous
+    /// blocks of a single log, each tested on its block and trained on the rest of the
+    /// log less the guards beside it.
+    pub fn from_folds(folds: Vec<(String, Accumulator, Accumulator)>) -> Self {
+        let mut out = Self {
+            names: Vec::with_capacity(folds.len()),
+            train: Vec::with_capacity(folds.len()),
+            test: Vec::with_capacity(folds.len()),
+        };
+        for (name, train, test) in folds {
+            out.names.push(name);
+            out.train.push(train);
+            out.test.push(test);
+        }
+        out
     }
 
     /// Number of folds.

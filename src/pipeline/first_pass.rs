@@ -1,24 +1,28 @@
 //! The first pass over a log: read once, each sample routed to the fit or held-out
-//! statistics, the thinned screening samples kept, the parsed chunks spilled for the
-//! second pass.
+//! statistics (a single fit log's to its time units), the thinned screening samples
+//! kept, the parsed chunks spilled for the second pass.
 
-use super::split::{Role, Splitter};
+use super::blocks::{BlockPlan, Units};
+use super::split::Role;
 use super::stream::stream_log;
 use super::{FitRequest, accumulate_error};
 use crate::diagnose::{SCREENING_SAMPLES, Thinned};
 use crate::error::Error;
 use crate::io::Summary;
 use crate::model::Workspace;
-use crate::sample::{SampleChunk, Signals};
+use crate::sample::Signals;
 use crate::source::LogSource;
 use crate::spill::{Spill, SpillWriter};
 use crate::stats::Accumulator;
 
-/// Statistics of one log: the samples fitted and those held out (its hold-out segments,
-/// or all samples of a validation log).
+/// Statistics of one log: the samples fitted and those held out for reporting (all
+/// samples of a validation log), or for a single fit log its time units, which the
+/// blocks that cross-validate it are made of.
 pub(super) struct LogStats {
     pub(super) fit: Accumulator,
     pub(super) held_out: Accumulator,
+    /// The time units of a single fit log (all its samples), `None` for other logs.
+    pub(super) units: Option<Units>,
     /// Thinned fit samples for the generic-pool screening.
     pub(super) screening: Thinned,
     pub(super) summary: Summary,
@@ -26,8 +30,6 @@ pub(super) struct LogStats {
     pub(super) signals: Option<Signals>,
     /// The log's parsed chunks for the second pass (log files only, when it runs).
     pub(super) spill: Option<Spill>,
-    /// Time the hold-out segments count from (the first sample's), s.
-    pub(super) t0: Option<f64>,
     /// Chunks the log was read in.
     pub(super) chunks: usize,
     /// Its runs of samples ([`Runs`]).
@@ -69,21 +71,30 @@ impl Runs {
     }
 }
 
+impl LogStats {
+    /// Samples fitted and held out (for plot decimation).
+    pub(super) fn kinds(&self) -> [u64; 2] {
+        let fit = self.units.as_ref().map_or(0, Units::samples);
+        [self.fit.count() + fit, self.held_out.count()]
+    }
+}
+
 /// What the second pass needs to know of a log from the first, in job order.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(super) struct LogCounts {
     /// Samples routed to fit and to validation (for plot decimation).
     pub(super) kinds: [u64; 2],
-    /// Time the log's hold-out segments count from, s.
-    pub(super) t0: Option<f64>,
     /// Chunks the log is read in (the same in both passes).
     pub(super) chunks: usize,
     /// The log is a time series ([`Runs::time_series`]).
     pub(super) time_series: bool,
+    /// The blocks of a single fit log.
+    pub(super) plan: Option<BlockPlan>,
 }
 
-/// Reads one log, routing each sample to the fit or validation statistics; `share` is
-/// the number of threads the job may use (see [`stream_log`]).
+/// Reads one log, routing each sample to the fit or validation statistics (a single fit
+/// log's to its time units); `share` is the number of threads the job may use (see
+/// [`stream_log`]).
 pub(super) fn read_log(
     source: &LogSource,
     role: Role,
@@ -92,28 +103,16 @@ pub(super) fn read_log(
 ) -> Result<LogStats, Error> {
     let mut fit = Accumulator::new(&req.structure);
     let mut held_out = Accumulator::new(&req.structure);
+    let mut units = (role == Role::Blocks).then(Units::new);
     let mut signals = None;
     let mut screening = Thinned::new(SCREENING_SAMPLES);
     let keep_screening = req.diagnose.is_some();
     let mut ws = Workspace::default();
-    let mut split = Splitter::new(role, None);
     let mut spill = match source {
         LogSource::File(_) if req.second_pass || req.diagnose.is_some() => {
             Some(SpillWriter::create()?)
         }
         _ => None,
-    };
-    let mut sink = |part: &SampleChunk, to_validation: bool| {
-        let acc = if to_validation {
-            &mut held_out
-        } else {
-            if keep_screening {
-                screening.push(part);
-            }
-            &mut fit
-        };
-        acc.push(&req.structure, part, &mut ws)
-            .map_err(accumulate_error(source))
     };
     let mut chunks = 0;
     let mut runs = Runs::default();
@@ -121,21 +120,33 @@ pub(super) fn read_log(
         chunks += 1;
         runs.push(&chunk.t);
         signals.get_or_insert_with(|| chunk.signals());
-        let kinds = split.route(chunk, &mut sink)?;
+        let n = chunk.len() as u64;
+        let pushed = if role.validates() {
+            held_out.push(&req.structure, chunk, &mut ws)
+        } else {
+            if keep_screening {
+                screening.push(chunk);
+            }
+            match units.as_mut() {
+                Some(units) => units.push(chunk, &req.structure, &mut ws),
+                None => fit.push(&req.structure, chunk, &mut ws),
+            }
+        };
+        pushed.map_err(accumulate_error(source))?;
+        let kinds = if role.validates() { [0, n] } else { [n, 0] };
         if let Some(w) = spill.as_mut() {
             w.write(chunk, kinds)?;
         }
         Ok(())
     })?;
-    split.finish(&mut sink)?;
     Ok(LogStats {
         fit,
         held_out,
+        units,
         screening,
         summary,
         signals,
         spill: spill.map(SpillWriter::finish).transpose()?,
-        t0: split.t0,
         chunks,
         runs,
     })

@@ -1,11 +1,13 @@
 //! The cross-validation folds of the fit logs' statistics, the same for the Eq. 22 model
 //! (first pass) and for the candidate effects (second pass): leave one log out with two
-//! or more fit logs, else a single log's hold-out segments.
+//! or more fit logs, else a single log's contiguous blocks.
 
 use super::FitRequest;
+use super::blocks::BlockPlan;
 use crate::diagnose::local::{LocalFolds, LocalRegions};
 use crate::error::Error;
 use crate::estimate::Folds;
+use crate::model::ModelStructure;
 use crate::stats::Accumulator;
 
 /// Merges statistics of the same structure (they always have its shape).
@@ -16,34 +18,30 @@ pub(super) fn merge(into: &mut Accumulator, other: &Accumulator) -> Result<(), E
     })
 }
 
-/// The fit logs' statistics ((fit, held-out) per log, job order) arranged for
-/// cross-validation and the final fit: leave one log out with two or more logs, else the
-/// log's hold-out segments (which `run` has checked hold samples). Returns the folds and
-/// the final fit data: all fit logs, the held-out segments of a single log included only
-/// when validation logs report instead.
+/// The fit logs' statistics (per fit log in job order, its pieces: one for each of
+/// several logs, the pieces of `plan` for a single log) arranged for cross-validation
+/// and the final fit: leave one log out with two or more logs, else the single log's
+/// contiguous blocks ([`BlockPlan::folds`]). Returns the folds and the final fit data,
+/// all fit samples.
 pub(super) fn arrange(
     req: &FitRequest,
-    parts: &[[&Accumulator; 2]],
+    structure: &ModelStructure,
+    plan: Option<&BlockPlan>,
+    parts: &[&[Accumulator]],
 ) -> Result<(Folds, Accumulator), Error> {
-    let merged = |pair: &[&Accumulator; 2]| -> Result<Accumulator, Error> {
-        let mut a = pair[0].clone();
-        merge(&mut a, pair[1])?;
-        Ok(a)
-    };
-    if let [single] = parts {
-        let folds = Folds::holdout("hold-out segments", single[0].clone(), single[1].clone());
-        let fit = if req.validate.is_empty() {
-            single[0].clone()
-        } else {
-            merged(single)?
-        };
-        return Ok((folds, fit));
+    if let (Some(plan), [single]) = (plan, parts) {
+        return plan
+            .folds(structure, single)
+            .map_err(|source| Error::Accumulate {
+                log: "block folds".into(),
+                source,
+            });
     }
     let logs = parts
         .iter()
         .zip(&req.logs)
-        .map(|(pair, source)| Ok((source.name(), merged(pair)?)))
-        .collect::<Result<Vec<_>, Error>>()?;
+        .map(|(pieces, source)| (source.name(), pieces[0].clone()))
+        .collect::<Vec<_>>();
     let folds = Folds::leave_one_out(&logs).map_err(|source| Error::Accumulate {
         log: "leave-one-out folds".into(),
         source,
@@ -56,10 +54,10 @@ pub(super) fn arrange(
 }
 
 /// The held-out statistics where each local candidate acts, per fold as [`arrange`]
-/// builds the folds (`parts`: each fit log's local statistics, see
-/// [`super::second_pass::local_kind`]): the hold-out part of a single log, or each whole
-/// log left out. A region with no active held-out sample in some fold is left out
-/// (judged globally).
+/// builds the folds (`parts`: the local statistics of each fold's held-out samples, per
+/// region, see [`super::second_pass::LocalGroup`]): a block of a single log, or a whole
+/// log left out. A region with fewer active held-out samples than it needs in some fold
+/// is left out (judged globally).
 pub(super) fn local_folds(
     regions: &LocalRegions,
     parts: &[Vec<Accumulator>],

@@ -7,14 +7,15 @@
 //! the log's threads and merged in order (`pass_log`): results never depend on
 //! `--threads`.
 //!
-//! Hold-out: without explicit validation logs, each log's time axis is cut into
-//! contiguous segments of [`Holdout::segment_seconds`] from its first sample, and every
-//! [`Holdout::every`]-th segment (the last of each group) is held out for validation —
-//! [`Holdout::DEFAULT`] by default. Rows of a time series are never
-//! sampled at random.
+//! Cross-validation: several fit logs are each predicted by the model fitted on the
+//! others; a single fit log is cut into [`Holdout::blocks`] contiguous blocks, each
+//! predicted by the model fitted on the rest of the log less [`Holdout::guard_seconds`]
+//! on each side of it ([`Holdout::DEFAULT`] by default; `blocks` says why). Every fit
+//! sample is fitted by the final model; rows of a time series are never sampled at
+//! random.
 //!
-//! One concept a file: `request` (what is asked, and its checks), `split` (hold-out
-//! routing of each log's samples), `stream` (reading a log in the pipeline's chunks),
+//! One concept a file: `request` (what is asked, and its checks), `split` (what each
+//! log's samples are for), `blocks` (the contiguous blocks of a single log), `stream` (reading a log in the pipeline's chunks),
 //! `feed` (Ω̈, progress and slow rotor thrusts on the way), `first_pass`, `folds`
 //! (cross-validation folds of both passes), `second_pass` and `segment_pass`,
 //! `threads` (jobs, segments, ordered results), `outcome` (what [`run`] returns).
@@ -27,6 +28,7 @@ use crate::source::LogSource;
 use crate::spill::Spill;
 use crate::stats::{AccumulateError, Accumulator};
 
+mod blocks;
 mod feed;
 mod first_pass;
 mod folds;
@@ -46,7 +48,7 @@ pub use request::{FitRequest, Holdout};
 use first_pass::{LogCounts, read_log};
 use folds::{arrange, merge};
 use outcome::validation_source;
-use request::{check, no_holdout};
+use request::{check, too_short};
 use second_pass::second_pass;
 use split::jobs;
 use threads::run_jobs;
@@ -63,7 +65,7 @@ fn accumulate_error(source: &LogSource) -> impl Fn(AccumulateError) -> Error + '
 pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     check(req)?;
     let jobs = jobs(req);
-    let per_log = run_jobs(&jobs, req, |_, path, role, share| {
+    let mut per_log = run_jobs(&jobs, req, |_, path, role, share| {
         read_log(path, role, req, share)
     })?;
     let n_fit = req.logs.len();
@@ -76,28 +78,42 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     for s in &per_log[n_fit..] {
         merge(&mut validation_stats, &s.held_out)?;
     }
-    let counts: Vec<LogCounts> = per_log
+    let mut counts: Vec<LogCounts> = per_log
         .iter()
         .map(|s| LogCounts {
-            kinds: [s.fit.count(), s.held_out.count()],
-            t0: s.t0,
+            kinds: s.kinds(),
             chunks: s.chunks,
             time_series: s.runs.time_series(),
+            plan: None,
         })
         .collect();
-    let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit]
-        .iter()
-        .map(|s| [&s.fit, &s.held_out])
-        .collect();
-    if parts.iter().all(|p| p[0].count() + p[1].count() == 0) {
+    if counts[..n_fit].iter().all(|c| c.kinds[0] == 0) {
         return Err(RequestError::NoSamples.into());
     }
-    if let [single] = &parts[..]
-        && single[1].count() == 0
-    {
-        return Err(no_holdout(req, &per_log[0]));
+    // A single fit log: its blocks, and the statistics of their pieces.
+    let mut plan = None;
+    let mut parts: Vec<Vec<Accumulator>> = Vec::with_capacity(n_fit);
+    for s in &mut per_log[..n_fit] {
+        let pieces = match s.units.take() {
+            Some(units) => {
+                let blocks = units.plan(req.holdout);
+                let blocks = blocks.map_err(|short| too_short(req, s, short))?;
+                let pieces = units.into_pieces(&blocks, &req.structure);
+                plan = Some(blocks);
+                pieces.map_err(|source| Error::Accumulate {
+                    log: s.summary.file.clone(),
+                    source,
+                })?
+            }
+            None => vec![std::mem::replace(
+                &mut s.fit,
+                Accumulator::new(&req.structure),
+            )],
+        };
+        parts.push(pieces);
     }
-    let (folds, fit_stats) = arrange(req, &parts)?;
+    let parts: Vec<&[Accumulator]> = parts.iter().map(Vec::as_slice).collect();
+    let (folds, fit_stats) = arrange(req, &req.structure, plan.as_ref(), &parts)?;
     let (summaries, spills): (Vec<Summary>, Vec<Option<Spill>>) =
         per_log.into_iter().map(|s| (s.summary, s.spill)).unzip();
     let fit = estimate::fit(&req.structure, &fit_stats, &req.fit)?;
@@ -108,7 +124,10 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     } else {
         (cv.pooled_metrics(), folds.test_samples())
     };
-    let validation_source = validation_source(req);
+    let validation_source = validation_source(req, plan.as_ref());
+    if let [single] = &mut counts[..n_fit] {
+        single.plan = plan;
+    }
     let mut outcome = FitOutcome {
         fit,
         fit_stats,

@@ -3,6 +3,7 @@
 //! diagnosis.
 
 use super::FitRequest;
+use super::blocks::BlockPlan;
 use crate::diagnose::Diagnosis;
 use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
 use crate::io::Summary;
@@ -53,22 +54,24 @@ pub struct FitOutcome {
     pub variance_inflation: f64,
 }
 
-/// Where the validation figures of a request come from, for the report.
-pub(super) fn validation_source(req: &FitRequest) -> String {
+/// Where the validation figures of a request come from, for the report (`plan`: the
+/// blocks of a single fit log).
+pub(super) fn validation_source(req: &FitRequest, plan: Option<&BlockPlan>) -> String {
     let n_fit = req.logs.len();
     if !req.validate.is_empty() {
         format!(
             "{} validation log(s), not used for any decision",
             req.validate.len()
         )
-    } else if n_fit > 1 {
+    } else if let Some(plan) = plan {
         format!(
-            "leave one log out over {n_fit} logs (each predicted by the model fitted on the others), pooled"
+            "{} contiguous blocks of the fit log, each predicted by the model fitted on the others less {} s on each side of it, pooled",
+            plan.blocks(),
+            plan.guard_seconds()
         )
     } else {
         format!(
-            "hold-out: every {}th {:.1} s segment of the fit log",
-            req.holdout.every, req.holdout.segment_seconds
+            "leave one log out over {n_fit} logs (each predicted by the model fitted on the others), pooled"
         )
     }
 }

@@ -4,6 +4,7 @@
 use std::sync::Arc;
 use std::sync::atomic::AtomicU64;
 
+use super::blocks::TooShort;
 use super::first_pass::LogStats;
 use crate::diagnose::DiagnoseOptions;
 use crate::error::{Error, RequestError};
@@ -13,13 +14,18 @@ use crate::model::ModelStructure;
 use crate::source::LogSource;
 use crate::vehicle::Vehicle;
 
-/// Time-segment hold-out of the fit logs.
+/// How a single fit log is cross-validated: cut into contiguous blocks, each predicted
+/// by the model fitted on the rest of the log less a guard on each side of it
+/// (`super::blocks` explains the choice). Several fit logs are cross-validated by
+/// leaving one log out instead.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Holdout {
-    /// Segment length, s.
-    pub segment_seconds: f64,
-    /// Every `every`-th segment is held out (fraction 1/every).
-    pub every: usize,
+    /// Contiguous blocks of (nearly) equal sample counts the log is cut into, each held
+    /// out in turn (at least 2; 1/blocks of the log per fold).
+    pub blocks: usize,
+    /// Time on each side of a held-out block that its fold neither fits nor scores, s
+    /// (≥ 0; rounded up to the pipeline's time units, 1/16 s for a log of up to 32 s).
+    pub guard_seconds: f64,
 }
 
 impl Default for Holdout {
@@ -29,18 +35,18 @@ impl Default for Holdout {
 }
 
 impl Holdout {
-    /// The hold-out of a single fit log unless asked otherwise, the one place it is
-    /// written: every 5th 2 s segment (20 % of the log, the first held-out segment
-    /// from 8 s on).
+    /// The cross-validation of a single fit log unless asked otherwise, the one place
+    /// it is written: 5 contiguous blocks (20 % of the log each, the last predicted from
+    /// the first 80 %), 2 s guards.
     pub const DEFAULT: Holdout = Holdout {
-        segment_seconds: 2.0,
-        every: 5,
+        blocks: 5,
+        guard_seconds: 2.0,
     };
 
-    /// True when the sample at `t` (s), in a log starting at `t0` (s), is held out.
-    pub fn holds_out(&self, t: f64, t0: f64) -> bool {
-        let segment = ((t - t0) / self.segment_seconds).floor() as usize;
-        self.every > 0 && segment % self.every == self.every - 1
+    /// Shortest span of a single fit log that can be cross-validated so, s: a guard per
+    /// block.
+    pub fn min_span(&self) -> f64 {
+        self.blocks as f64 * self.guard_seconds
     }
 }
 
@@ -59,7 +65,7 @@ pub struct FitRequest {
     pub structure: ModelStructure,
     /// Estimation options.
     pub fit: FitOptions,
-    /// Segment hold-out of a single fit log (cross-validation of one log).
+    /// Cross-validation of a single fit log on contiguous blocks.
     pub holdout: Holdout,
     /// Reporting-only validation logs: evaluated, never used for a decision.
     pub validate: Vec<LogSource>,
@@ -79,10 +85,10 @@ pub(super) fn check(req: &FitRequest) -> Result<(), RequestError> {
         return Err(RequestError::NoLogs);
     }
     let h = req.holdout;
-    if !(h.segment_seconds.is_finite() && h.segment_seconds > 0.0 && h.every >= 2) {
+    if !(h.guard_seconds.is_finite() && h.guard_seconds >= 0.0 && h.blocks >= 2) {
         return Err(RequestError::InvalidHoldout {
-            segment_seconds: h.segment_seconds,
-            every: h.every,
+            blocks: h.blocks,
+            guard_seconds: h.guard_seconds,
         });
     }
     let (structure, vehicle) = (req.structure.rotor_count(), req.vehicle.rotor_count());
@@ -92,21 +98,16 @@ pub(super) fn check(req: &FitRequest) -> Result<(), RequestError> {
     crate::inputs::check_logs(&req.logs, &req.validate)
 }
 
-/// The error of a single fit log none of whose samples was held out (`log`, read as
-/// `req.logs[0]`): its time looks logged in ms or µs (bad input), else it is too short
-/// for the hold-out, or sampled more coarsely than its segments.
-pub(super) fn no_holdout(req: &FitRequest, log: &LogStats) -> Error {
+/// The error of a single fit log (`log`, read as `req.logs[0]`) too short for its blocks
+/// (`short`): its time looks logged in ms or µs (bad input), else it is too short.
+pub(super) fn too_short(req: &FitRequest, log: &LogStats, short: TooShort) -> Error {
     let s = &log.summary;
     let (span, median_step) = match &req.logs[0] {
-        LogSource::Memory(m) => {
-            let first = m.chunks().first().and_then(|c| c.t.first());
-            let last = m.chunks().last().and_then(|c| c.t.last());
-            (first.zip(last).map_or(0.0, |(a, b)| b - a), None)
-        }
+        LogSource::Memory(_) => (short.span, None),
         LogSource::File(_) => (s.span, s.median_time_step),
     };
-    let samples = log.fit.count() + log.held_out.count();
-    let consequence = ", so no sample falls in a held-out segment";
+    let samples = short.samples;
+    let consequence = ", so it cannot be cut into cross-validation blocks";
     if let Some(text) = io::time_unit_suspect(median_step, span, samples, consequence) {
         return io::IoError::new(
             &s.file,
@@ -121,8 +122,8 @@ pub(super) fn no_holdout(req: &FitRequest, log: &LogStats) -> Error {
         samples,
         span,
         median_step,
-        segment_seconds: req.holdout.segment_seconds,
-        every: req.holdout.every,
+        blocks: req.holdout.blocks,
+        guard_seconds: req.holdout.guard_seconds,
     }
     .into()
 }

@@ -6,6 +6,7 @@
 
 use std::sync::atomic::Ordering;
 
+use super::blocks::BlockPlan;
 use super::first_pass::LogCounts;
 use super::folds::{arrange, local_folds, merge};
 use super::remainder::remainder;
@@ -91,6 +92,8 @@ pub(super) struct PassContext<'a> {
     pub(super) residuals: ResidualPass,
     /// Candidate effects, when diagnosing.
     pub(super) extended: Option<Extended>,
+    /// The blocks of a single fit log.
+    pub(super) plan: Option<&'a BlockPlan>,
     /// Plot decimation: every `stride`-th sample of the whole run (fit, validation).
     pub(super) strides: [u64; 2],
 }
@@ -103,24 +106,19 @@ pub(super) struct LogPass {
     pub(super) series: [PlotSeries; 2],
     /// First and last sample time of each kind in this log, s (NaN when none).
     pub(super) span: [(f64, f64); 2],
-    /// Candidate-effect statistics (fitted, held-out samples), when diagnosing.
-    pub(super) candidates: Option<[Accumulator; 2]>,
-    /// The same over the samples where local candidates act, by activity pattern, from
-    /// the kind [`local_kind`] names (empty for a validation log).
-    pub(super) local: ActivityParts,
+    /// Candidate-effect statistics when diagnosing: of the whole log, or of each piece
+    /// of a single fit log's blocks (`None` while a piece has no sample).
+    pub(super) candidates: Option<Vec<Option<Accumulator>>>,
+    /// The same over the samples where local candidates act, by activity pattern, per
+    /// [`LocalGroup`] of the log.
+    pub(super) local: Vec<ActivityParts>,
 }
 
-/// Which samples of a log (fit: false, held-out: true) the local-region statistics are
-/// built from: the held-out part of a single fit log, every sample of each of several
-/// fit logs (each is left out in turn), none of a validation log (it reports, never
-/// decides). [`local_folds`] uses nothing else.
-pub(super) fn local_kind(role: Role) -> Option<bool> {
-    match role {
-        Role::Fit => Some(false),
-        Role::Split(_) => Some(true),
-        Role::Validation => None,
-    }
-}
+/// The local-region statistics a run of samples goes to: those of the held-out data of
+/// a fold, which is each of several fit logs whole (group 0) or each block of a single
+/// fit log (group = block); `None` for a validation log (it reports, never decides).
+/// [`local_folds`] uses nothing else.
+pub(super) type LocalGroup = Option<usize>;
 
 /// Streams the data again (each log file from its spill, in job order with `jobs`):
 /// residual diagnostics of the fit samples, decimated series of both parts for plots,
@@ -137,6 +135,7 @@ pub(super) fn second_pass(
     out: &mut FitOutcome,
 ) -> Result<(), Error> {
     let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
+    let plan = counts.iter().find_map(|c| c.plan.as_ref());
     let ctx = PassContext {
         req,
         theta: &out.fit.mmr.theta,
@@ -150,6 +149,7 @@ pub(super) fn second_pass(
             }
             _ => None,
         },
+        plan,
         strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.kinds[k]).sum())),
     };
     // Samples of each kind before each log: its first sample's place in the decimation.
@@ -166,7 +166,6 @@ pub(super) fn second_pass(
         let at = Start {
             seen: starts[i],
             in_log: [0; 2],
-            t0: counts[i].t0,
         };
         let log = Log {
             source: path,
@@ -200,25 +199,33 @@ pub(super) fn second_pass(
     let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
         return Ok(());
     };
-    let local_parts = shares
-        .iter()
-        .zip(jobs)
-        .take(req.logs.len())
-        .map(|(s, (source, _))| {
-            let regions = ext.regions.per_region(&s.local, &ext.structure);
-            regions.map_err(accumulate_error(source))
+    let mut local_parts = Vec::new();
+    for (share, (source, _)) in shares.iter().zip(jobs).take(req.logs.len()) {
+        for group in &share.local {
+            let regions = ext.regions.per_region(group, &ext.structure);
+            local_parts.push(regions.map_err(accumulate_error(source))?);
+        }
+    }
+    let per_log: Vec<Vec<Accumulator>> = shares
+        .into_iter()
+        .filter_map(|s| s.candidates)
+        .map(|pieces| {
+            let empty = || Accumulator::new(&ext.structure);
+            pieces
+                .into_iter()
+                .map(|p| p.unwrap_or_else(empty))
+                .collect()
         })
-        .collect::<Result<Vec<_>, _>>()?;
-    let per_log: Vec<[Accumulator; 2]> = shares.into_iter().filter_map(|s| s.candidates).collect();
+        .collect();
     let n_fit = req.logs.len();
     if per_log.len() != jobs.len() {
         return Ok(());
     }
-    let parts: Vec<[&Accumulator; 2]> = per_log[..n_fit].iter().map(|[a, b]| [a, b]).collect();
-    let (folds, fit) = arrange(req, &parts)?;
+    let parts: Vec<&[Accumulator]> = per_log[..n_fit].iter().map(Vec::as_slice).collect();
+    let (folds, fit) = arrange(req, &ext.structure, plan, &parts)?;
     let mut report = Accumulator::new(&ext.structure);
-    for [_, held_out] in &per_log[n_fit..] {
-        merge(&mut report, held_out)?;
+    for pieces in &per_log[n_fit..] {
+        merge(&mut report, &pieces[0])?;
     }
     let local = local_folds(&ext.regions, &local_parts, &folds);
     options.variance_inflation = options.variance_inflation.max(inflation);
@@ -269,8 +276,6 @@ pub(super) struct Start {
     pub(super) seen: [u64; 2],
     /// The same in this log only.
     pub(super) in_log: [u64; 2],
-    /// Time the log's hold-out segments count from, s.
-    pub(super) t0: Option<f64>,
 }
 
 /// A log as its second pass reads it.
@@ -290,7 +295,7 @@ struct Log<'a> {
 /// came from a file or from memory.
 fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<LogPass, Error> {
     let (source, role) = (log.source, log.role);
-    let mut share = LogPass::empty(ctx);
+    let mut share = LogPass::empty(ctx, role);
     let mut append = |part: LogPass| share.append(part).map_err(accumulate_error(source));
     let cuts = segments(log.spill.map_or(log.chunks, Spill::chunks));
     match log.spill {
@@ -303,14 +308,14 @@ fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<L
                     spill.before(chunks.start)
                 };
                 let seen = [0, 1].map(|k| at.seen[k] + in_log[k]);
-                let start = Start { seen, in_log, ..at };
+                let start = Start { seen, in_log };
                 let mut pass = SegmentPass::new(ctx, source, role, start);
                 // Spilled with its Ω̈ (derived in the first pass).
                 spill.stream_chunks(chunks, |chunk| {
                     count_progress(ctx.req, chunk);
                     pass.push(chunk)
                 })?;
-                pass.finish()
+                Ok(pass.finish())
             };
             run_in_order(cuts.len(), threads, pass_segment, &mut append)?;
         }
@@ -321,13 +326,13 @@ fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<L
             stream_log(source, ctx.req, threads, |chunk| {
                 if cuts.get(segment + 1).is_some_and(|next| next.start == read) {
                     let next = SegmentPass::new(ctx, source, role, pass.next_start());
-                    append(std::mem::replace(&mut pass, next).finish()?)?;
+                    append(std::mem::replace(&mut pass, next).finish())?;
                     segment += 1;
                 }
                 read += 1;
                 pass.push(chunk)
             })?;
-            append(pass.finish()?)?;
+            append(pass.finish())?;
         }
     }
     share.times_from_start();

@@ -1,10 +1,11 @@
-//! The second pass over one segment of a log: its samples routed as in the first pass,
-//! the fit samples' residuals, the plotted samples' predictions and, when diagnosing,
-//! every candidate effect's statistics folded into the segment's [`LogPass`] share.
+//! The second pass over one segment of a log: the fit samples' residuals, the plotted
+//! samples' predictions and, when diagnosing, every candidate effect's statistics (a
+//! single fit log's per piece of its blocks) folded into the segment's [`LogPass`]
+//! share.
 
 use super::accumulate_error;
-use super::second_pass::{LogPass, PassContext, Start, local_kind};
-use super::split::{Role, Splitter};
+use super::second_pass::{LocalGroup, LogPass, PassContext, Start};
+use super::split::Role;
 use crate::diagnose::local::ActivityParts;
 use crate::error::Error;
 use crate::model::Workspace;
@@ -15,11 +16,12 @@ use crate::stats::{AccumulateError, Accumulator};
 /// The second pass over one segment of a log.
 pub(super) struct SegmentPass<'a> {
     source: &'a LogSource,
-    split: Splitter,
+    /// A run of samples of one piece cut from a chunk (a single fit log's blocks).
+    run: SampleChunk,
     state: SegmentState<'a>,
 }
 
-/// What a segment's sink works on (apart from its splitter).
+/// What a segment's sink works on.
 struct SegmentState<'a> {
     ctx: &'a PassContext<'a>,
     role: Role,
@@ -47,11 +49,11 @@ impl<'a> SegmentPass<'a> {
     ) -> Self {
         Self {
             source,
-            split: Splitter::new(role, at.t0),
+            run: SampleChunk::default(),
             state: SegmentState {
                 ctx,
                 role,
-                share: LogPass::empty(ctx),
+                share: LogPass::empty(ctx, role),
                 seen: at.seen,
                 in_log: at.in_log,
                 first: at.in_log,
@@ -66,57 +68,73 @@ impl<'a> SegmentPass<'a> {
 
     /// Where the segment after this one starts (call after its last chunk).
     pub(super) fn next_start(&self) -> Start {
-        let waiting = |k: usize| self.split.parts[k].len() as u64;
         Start {
-            seen: std::array::from_fn(|k| self.state.seen[k] + waiting(k)),
-            in_log: std::array::from_fn(|k| self.state.in_log[k] + waiting(k)),
-            t0: self.split.t0,
+            seen: self.state.seen,
+            in_log: self.state.in_log,
         }
     }
 
+    /// Folds in the samples of `chunk`: whole, or for a single fit log in runs of one
+    /// piece of its blocks each.
     pub(super) fn push(&mut self, chunk: &SampleChunk) -> Result<(), Error> {
-        let state = &mut self.state;
-        let source = self.source;
-        self.split
-            .route(chunk, &mut |part, v| state.sink(source, part, v))
-            .map(|_| ())
+        let (state, source, run) = (&mut self.state, self.source, &mut self.run);
+        match (state.role, state.ctx.plan) {
+            (Role::Blocks, Some(plan)) => plan.route(chunk, |rows, piece| {
+                let group = Some(plan.group_of(piece));
+                if rows.len() == chunk.len() {
+                    return state.sink(source, chunk, false, piece, group);
+                }
+                run.clear();
+                run.extend_from(chunk, rows);
+                state.sink(source, run, false, piece, group)
+            }),
+            (role, _) => {
+                let validates = role.validates();
+                state.sink(source, chunk, validates, 0, (!validates).then_some(0))
+            }
+        }
     }
 
-    pub(super) fn finish(mut self) -> Result<LogPass, Error> {
-        let state = &mut self.state;
-        let source = self.source;
-        self.split
-            .finish(&mut |part, v| state.sink(source, part, v))?;
-        Ok(self.state.share)
+    /// The segment's share.
+    pub(super) fn finish(self) -> LogPass {
+        self.state.share
     }
 }
 
 impl SegmentState<'_> {
-    /// Folds a run of samples of one kind into the segment's share.
+    /// Folds a run of samples of one kind (`to_validation`) and one piece of the log
+    /// (`piece`, 0 unless it is a single fit log) into the segment's share, and into the
+    /// local statistics of `group` (see [`LocalGroup`]).
     fn sink(
         &mut self,
         source: &LogSource,
         part: &SampleChunk,
         to_validation: bool,
+        piece: usize,
+        group: LocalGroup,
     ) -> Result<(), Error> {
         let k = usize::from(to_validation);
         let ctx = self.ctx;
         let share = &mut self.share;
         let ws = &mut self.ws;
         let at = |e: AccumulateError| accumulate_error(source)(e.after(self.first[k]));
-        if let (Some(ext), Some(acc)) = (&ctx.extended, share.candidates.as_mut()) {
+        if let (Some(ext), Some(pieces)) = (&ctx.extended, share.candidates.as_mut()) {
             let assembled = ext
                 .structure
                 .assemble_reusing(part, ws, &ext.stored, &ext.plan);
             assembled.map_err(|e| at(e.into()))?;
-            acc[k].push_assembled(ws).map_err(at)?;
-            if local_kind(self.role) == Some(to_validation) {
+            let acc = pieces[piece].get_or_insert_with(|| Accumulator::new(&ext.structure));
+            // The accumulator counts its own samples; the error names the log's.
+            let offset = self.in_log[k] - acc.count();
+            acc.push_assembled(ws)
+                .map_err(|e| accumulate_error(source)(e.after(offset)))?;
+            if let Some(g) = group {
                 ext.regions
                     .push(
                         part,
                         ws,
                         &ext.structure,
-                        &mut share.local,
+                        &mut share.local[g],
                         &mut self.active_ws,
                         &mut self.part_ws,
                     )
@@ -169,19 +187,19 @@ impl SegmentState<'_> {
 }
 
 impl LogPass {
-    /// The share of no samples.
-    pub(super) fn empty(ctx: &PassContext) -> Self {
+    /// The share of no samples of a log of `role`.
+    pub(super) fn empty(ctx: &PassContext, role: Role) -> Self {
+        let (pieces, groups) = match (role, ctx.plan) {
+            (Role::Blocks, Some(plan)) => (plan.pieces.len(), plan.blocks()),
+            (Role::Validation, _) => (1, 0),
+            _ => (1, 1),
+        };
         Self {
             residuals: ctx.residuals.clone(),
             series: Default::default(),
             span: [(f64::NAN, f64::NAN); 2],
-            candidates: ctx.extended.as_ref().map(|e| {
-                [
-                    Accumulator::new(&e.structure),
-                    Accumulator::new(&e.structure),
-                ]
-            }),
-            local: ActivityParts::default(),
+            candidates: ctx.extended.as_ref().map(|_| vec![None; pieces]),
+            local: vec![ActivityParts::default(); groups],
         }
     }
 
@@ -204,11 +222,17 @@ impl LogPass {
             }
         }
         if let (Some(mine), Some(theirs)) = (self.candidates.as_mut(), later.candidates) {
-            for (a, b) in mine.iter_mut().zip(&theirs) {
-                a.merge(b)?;
+            for (a, b) in mine.iter_mut().zip(theirs) {
+                match (a.as_mut(), b) {
+                    (Some(a), Some(b)) => a.merge(&b)?,
+                    (None, b) => *a = b,
+                    (Some(_), None) => {}
+                }
             }
         }
-        self.local.merge(&later.local)?;
+        for (a, b) in self.local.iter_mut().zip(&later.local) {
+            a.merge(b)?;
+        }
         Ok(())
     }
 

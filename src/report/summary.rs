@@ -49,7 +49,7 @@ pub struct Report {
     /// The same on the validation data (the validation logs, else cross-validated).
     pub validation: Vec<AxisRow>,
     /// Cross-validation of the Eq. 22 model: each fold's held-out metrics (a log
-    /// predicted by the model fitted on the others, or the hold-out segments), then all
+    /// predicted by the model fitted on the others, or a single log's blocks), then all
     /// folds pooled.
     pub cross_validation: Vec<FoldRow>,
     /// FSOA table per axis (seed Tables 2–3).
@@ -68,7 +68,7 @@ pub struct Report {
 /// Held-out metrics of one cross-validation fold (or of all pooled).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FoldRow {
-    /// The held-out data: a log's file name, `hold-out segments`, or `pooled`.
+    /// The held-out data: a log's file name, a block of a single log, or `pooled`.
     pub name: String,
     /// Metrics per axis.
     pub axes: Vec<AxisRow>,
@@ -77,7 +77,7 @@ pub struct FoldRow {
 /// Held-out metrics before and after the diagnosis on one data set.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BeforeAfterRow {
-    /// The held-out data: a log's file name, `hold-out segments`, `pooled`, or
+    /// The held-out data: a log's file name, a block of a single log, `pooled`, or
     /// `validation logs`.
     pub name: String,
     /// Eq. 22 model, per axis.
@@ -127,6 +127,10 @@ pub struct DiagnosisReport {
     /// rotor signals over lags (time series only).
     #[serde(default)]
     pub remainder: Vec<AxisRemainder>,
+    /// Axes on which the final model predicts the held-out data (all folds pooled) worse
+    /// than the Eq. 22 model (`Diagnosis::worse_than_base`); absent when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub worse_than_base: Vec<Axis>,
 }
 
 /// An effect (candidate) with its estimates.
@@ -288,6 +292,7 @@ impl From<&Diagnosis> for DiagnosisReport {
             findings: d.findings.clone(),
             stopped_at_limit: d.stopped_at_limit,
             remainder: d.remainder.clone(),
+            worse_than_base: d.worse_than_base(),
         }
     }
 }

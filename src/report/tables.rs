@@ -152,6 +152,21 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
     for r in &d.remainder {
         let _ = writeln!(out, "  what is left: {}", r.sentence());
     }
+    for axis in &d.worse_than_base {
+        let at = |rows: &[AxisRow]| {
+            rows.iter()
+                .find(|r| r.axis == *axis)
+                .map_or(f64::NAN, |r| r.r2)
+        };
+        let _ = writeln!(
+            out,
+            "  worse than the Eq. 22 model on the held-out {} data: R2 {:.1}% -> {:.1}% (the \
+             terms added and left out pay on all axes together)",
+            axis.name(),
+            100.0 * at(&d.before),
+            100.0 * at(&d.after)
+        );
+    }
     let _ = writeln!(out, "  R2 [%] per held-out data, before -> after");
     let rows: Vec<(String, &Vec<AxisRow>)> = d
         .folds
@@ -286,10 +301,13 @@ fn fit_table(out: &mut String, r: &Report) {
         );
     }
     if r.cross_validation.len() > 2 {
-        let _ = writeln!(
-            out,
-            "  cross-validated R2 [%] (each log predicted by the model fitted on the others)"
-        );
+        // A single log's folds are its blocks (`block k/K (a-b s)`), several logs' the logs.
+        let held_out = if r.cross_validation[0].name.starts_with("block ") {
+            "each block predicted by the model fitted on the rest of the log less its guards"
+        } else {
+            "each log predicted by the model fitted on the others"
+        };
+        let _ = writeln!(out, "  cross-validated R2 [%] ({held_out})");
         r2_rows(
             out,
             r.cross_validation

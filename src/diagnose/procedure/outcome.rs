@@ -243,6 +243,22 @@ pub struct Diagnosis {
     pub fit: Fit,
 }
 
+impl Diagnosis {
+    /// Axes on which the final model predicts the held-out data (all folds pooled) worse
+    /// than the base (Eq. 22) model, beyond rounding (RMSE higher by more than 1e-9,
+    /// relative). The additions and removals are chosen on all axes together, so one
+    /// axis can lose a little while the others gain much: the report says so, never
+    /// silently.
+    pub fn worse_than_base(&self) -> Vec<Axis> {
+        self.before
+            .iter()
+            .zip(&self.after)
+            .filter(|(b, a)| a.rmse > b.rmse * (1.0 + 1e-9))
+            .map(|(b, _)| b.axis)
+            .collect()
+    }
+}
+
 /// Why the procedure could not run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DiagnoseError {
