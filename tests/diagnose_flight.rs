@@ -94,18 +94,23 @@ fn ground_effect_in_a_partly_low_flight_is_found_in_its_per_rotor_form() {
 }
 
 /// A 60 s flight at usual altitudes (nothing flown low on purpose) where the per-rotor
-/// ground effect acts on only a handful of held-out samples. Their output range is
-/// almost nil, so an NRMSE there is meaningless: before a gain where a candidate acts
-/// needed [`mrsysid::diagnose::local::MIN_ACTIVE_SAMPLES`] active held-out samples, the
-/// gain came out non-finite, the form (P ≈ 1e-147) was rejected "−inf % below 5 %" and
-/// a generic moment term was reported in its place. It is now judged on all held-out
-/// samples and added.
+/// ground effect acts on only a handful of held-out samples (5 % measured), all in one of
+/// the five contiguous cross-validation blocks. Their output range is small, so a fold
+/// with under [`mrsysid::diagnose::local::MIN_ACTIVE_SAMPLES`] of them gives no NRMSE
+/// (before that minimum the gain came out non-finite and the form, P ≈ 1e-147, was
+/// rejected "−inf % below 5 %"); the folds where it does act judge it, the others are
+/// left out of its local gain.
 #[test]
-fn ground_effect_with_few_active_held_out_samples_is_judged_on_all_of_them() {
+fn ground_effect_with_few_active_held_out_samples_is_judged_where_it_acts() {
     let d = diagnose_flight(&["ground_effect=1"], 60.0, 0.0, 14_008);
     println!("{:#?}", d.findings);
     let e = per_rotor_ground_effect(&d);
-    assert!(e.local_gain.is_none(), "{:?}", e.local_gain);
+    assert!(e.active_share < 0.1, "acts on {}", e.active_share);
+    // Judged where it acts: roll and pitch much better predicted there (69 % and 79 %
+    // measured), every gain finite.
+    let local = e.local_gain.expect("judged in the block where it acts");
+    assert!(local.iter().all(|g| g.is_finite()), "{local:?}");
+    assert!(local[3] > 0.3 && local[4] > 0.3, "{local:?}");
     // Cheeseman–Bennett is the truth's law: scale in the final model within 0.15 of 1
     // (1.04 ± 0.04 measured).
     let (k, std) = final_ground_effect_scale(&d);
@@ -188,12 +193,13 @@ fn the_delays_yaw_column_carries_the_lead_of_the_reaction_torque() {
 /// A 30 s flight whose logged rotor speeds lag by 20 ms, at a seed where thrust from
 /// rotor acceleration (ΔT_i ∝ Ω̇_i) and the delay (ΔT_i ∝ Ω_i Ω̇_i, with the yaw torque
 /// and the reaction torque's lead that follow), two forms of one effect, are both
-/// accepted in the same step. Before the delay's yaw column carried the reaction torque's
-/// lead J_z τ δ̈r, the summed gains put the acceleration form ahead within 10 % and the
-/// held-out likelihood had to name the delay; now the delay explains the yaw moment too
-/// and leads on both, and the finding still names the other form as not separable.
+/// accepted in the same step. Once the delay's yaw column carried the reaction torque's
+/// lead J_z τ δ̈r, the delay explains the yaw moment too; judged on contiguous blocks it
+/// leads on the summed gain (1.04 against 0.54 measured) and on the held-out likelihood
+/// (4570 against 2535), far beyond noise, so the delay is named alone, not as "or" its
+/// other form.
 #[test]
-fn between_forms_of_one_effect_the_delay_is_named_with_its_other_form() {
+fn between_forms_of_one_effect_the_delay_is_named_when_it_leads_beyond_noise() {
     let d = diagnose_flight(&["delay=0.02"], 30.0, 0.0, 12_004);
     println!("{:#?}", d.findings);
     let step = d
@@ -224,11 +230,12 @@ fn between_forms_of_one_effect_the_delay_is_named_with_its_other_form() {
     );
     assert!(delay.total_gain > acceleration.total_gain);
     assert!(delay.held_out_lr > acceleration.held_out_lr);
+    assert!(delay.held_out_lr > 1.5 * acceleration.held_out_lr);
     assert!(
         d.findings
             .iter()
             .any(|f| f.starts_with("rotor-speed delay")
-                && f.contains("thrust from rotor acceleration")),
+                && !f.contains("thrust from rotor acceleration")),
         "{:#?}",
         d.findings
     );

@@ -193,17 +193,27 @@ pub struct LocalFolds {
 }
 
 impl LocalFolds {
-    /// `tests[j]` the active held-out samples of fold j of `folds`; `None` when a fold
-    /// has fewer than [`MIN_ACTIVE_SAMPLES`] (the gain there cannot be measured).
+    /// `tests[j]` the active held-out samples of fold j of `folds`. The folds with at
+    /// least [`MIN_ACTIVE_SAMPLES`] of them are kept (a contiguous block of one log may
+    /// lie wholly where the effect does not act, e.g. the climb-out after a low flight);
+    /// `None` when no fold has that many (the gain there cannot be measured).
     pub fn new(candidate: usize, folds: &Folds, tests: Vec<Accumulator>) -> Option<Self> {
-        if tests.iter().any(|t| t.count() < MIN_ACTIVE_SAMPLES) {
+        if tests.len() != folds.len() {
             return None;
         }
         let active: u64 = tests.iter().map(Accumulator::count).sum();
         let share = active as f64 / folds.test_samples().max(1) as f64;
+        let (keep, tests): (Vec<usize>, Vec<Accumulator>) = tests
+            .into_iter()
+            .enumerate()
+            .filter(|(_, t)| t.count() >= MIN_ACTIVE_SAMPLES)
+            .unzip();
+        if keep.is_empty() {
+            return None;
+        }
         Some(Self {
             candidate,
-            folds: folds.with_tests(tests)?,
+            folds: folds.subset_with_tests(&keep, tests)?,
             share,
         })
     }
@@ -246,6 +256,16 @@ mod tests {
         assert!(LocalFolds::new(0, &folds, vec![first(n - 1)]).is_none());
         let local = LocalFolds::new(0, &folds, vec![first(n)]).expect("enough samples");
         assert_eq!(local.share, n as f64 / 100.0);
+        // Two folds, the effect acting in the first only (a block of the log wholly
+        // outside its region): judged on that fold alone, its share over both.
+        let two = Folds::from_folds(vec![
+            ("a".into(), first(200), first(100)),
+            ("b".into(), first(200), first(100)),
+        ]);
+        let empty = Accumulator::new(&s);
+        let local = LocalFolds::new(0, &two, vec![first(n), empty]).expect("one fold acts");
+        assert_eq!(local.folds.len(), 1);
+        assert_eq!(local.share, n as f64 / 200.0);
     }
 
     /// A region's statistics merged from the activity patterns it acts in equal those of

@@ -93,12 +93,12 @@ impl Folds {
         }
     }
 
-    /// The same training statistics with other test statistics, one per fold (e.g. the
-    /// held-out samples where a local effect acts); `None` when the counts differ.
-    pub fn with_tests(&self, test: Vec<Accumulator>) -> Option<Folds> {
-        (test.len() == self.test.len()).then(|| Folds {
-            names: self.names.clone(),
-            train: self.train.clone(),
+    /// The folds whose indices are in `keep` (in that order), other test statistics
+    /// `test` (one per kept fold): the folds where a local effect acts.
+    pub fn subset_with_tests(&self, keep: &[usize], test: Vec<Accumulator>) -> Option<Folds> {
+        (test.len() == keep.len() && keep.iter().all(|&j| j < self.len())).then(|| Folds {
+            names: keep.iter().map(|&j| self.names[j].clone()).collect(),
+            train: keep.iter().map(|&j| self.train[j].clone()).collect(),
             test,
         })
     }

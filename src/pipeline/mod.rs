@@ -48,7 +48,7 @@ pub use request::{FitRequest, Holdout};
 use first_pass::{LogCounts, read_log};
 use folds::{arrange, merge};
 use outcome::validation_source;
-use request::{check, too_short};
+use request::{check, time_unit_error, too_short};
 use second_pass::second_pass;
 use split::jobs;
 use threads::run_jobs;
@@ -68,6 +68,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     let mut per_log = run_jobs(&jobs, req, |_, path, role, share| {
         read_log(path, role, req, share)
     })?;
+    time_unit_error(req, &per_log)?;
     let n_fit = req.logs.len();
     let mut validation_stats = Accumulator::new(&req.structure);
     let mut screening = Thinned::new(SCREENING_SAMPLES);

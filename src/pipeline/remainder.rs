@@ -97,10 +97,10 @@ impl LogRemainder<'_> {
             }
         }
         let moments = [Axis::Mx, Axis::My, Axis::Mz];
-        for k in 0..n {
+        for (k, &tk) in chunk.t.iter().enumerate().take(n) {
             let e = moments.map(|m| chunk.wrench[m as usize][k] - y[m as usize][k]);
             let x = [0, 1, 2].map(|a| [self.scratch[2 * a][k], self.scratch[2 * a + 1][k]]);
-            self.sums.push(chunk.t[k], e, x);
+            self.sums.push(tk, e, x);
         }
         Ok(())
     }

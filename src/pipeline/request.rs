@@ -98,8 +98,34 @@ pub(super) fn check(req: &FitRequest) -> Result<(), RequestError> {
     crate::inputs::check_logs(&req.logs, &req.validate)
 }
 
+/// The error of the first log file (fit or validation, `per_log` in job order) whose time
+/// looks logged in ms or µs: a median step over 1 s or a span over a day
+/// ([`io::time_unit_suspect`]). Its blocks or its dynamics would be cut on a wrong clock.
+pub(super) fn time_unit_error(req: &FitRequest, per_log: &[LogStats]) -> Result<(), Error> {
+    let sources = req.logs.iter().chain(&req.validate);
+    for (source, log) in sources.zip(per_log) {
+        let s = &log.summary;
+        if !matches!(source, LogSource::File(_)) {
+            continue;
+        }
+        let consequence = ", far slower than any flight log";
+        if let Some(text) =
+            io::time_unit_suspect(s.median_time_step, s.span, s.rows_read, consequence)
+        {
+            return Err(io::IoError::new(
+                &s.file,
+                io::Location::File,
+                None,
+                io::ErrorKind::Mapping(text),
+            )
+            .into());
+        }
+    }
+    Ok(())
+}
+
 /// The error of a single fit log (`log`, read as `req.logs[0]`) too short for its blocks
-/// (`short`): its time looks logged in ms or µs (bad input), else it is too short.
+/// (`short`); a clock in ms or µs was refused before ([`time_unit_error`]).
 pub(super) fn too_short(req: &FitRequest, log: &LogStats, short: TooShort) -> Error {
     let s = &log.summary;
     let (span, median_step) = match &req.logs[0] {
@@ -107,16 +133,6 @@ pub(super) fn too_short(req: &FitRequest, log: &LogStats, short: TooShort) -> Er
         LogSource::File(_) => (s.span, s.median_time_step),
     };
     let samples = short.samples;
-    let consequence = ", so it cannot be cut into cross-validation blocks";
-    if let Some(text) = io::time_unit_suspect(median_step, span, samples, consequence) {
-        return io::IoError::new(
-            &s.file,
-            io::Location::File,
-            None,
-            io::ErrorKind::Mapping(text),
-        )
-        .into();
-    }
     RequestError::HoldoutTooShort {
         log: s.file.clone(),
         samples,
