@@ -15,7 +15,7 @@
 
 use std::sync::Arc;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
 use crate::diagnose::local::{ActivityParts, LocalFolds, LocalRegions};
 use crate::diagnose::{
@@ -92,6 +92,10 @@ pub struct FitRequest {
     pub diagnose: Option<DiagnoseOptions>,
     /// Samples read so far, over both passes, for a progress display.
     pub progress: Option<Arc<AtomicU64>>,
+    /// Set by the caller to stop the fit: checked before every chunk of both passes
+    /// (where `progress` is counted), the fit then ends with
+    /// [`RequestError::Cancelled`].
+    pub cancel: Option<Arc<AtomicBool>>,
 }
 
 /// Decimated measured/predicted series for plots, per axis.
@@ -363,6 +367,7 @@ fn stream_log(
 struct Feed<'p, C> {
     derive: DeriveOptions,
     progress: Option<&'p AtomicU64>,
+    cancel: Option<&'p AtomicBool>,
     jerk: JerkScratch,
     /// The slow rotor thrusts are wanted; the stage once the first chunk is in.
     slow_wanted: bool,
@@ -374,13 +379,14 @@ impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
     /// The feed of a fit: the slow thrusts for a diagnosis.
     fn of_fit(req: &'p FitRequest, consume: C) -> Self {
         Self::new(jerk_options(req), req.diagnose.is_some(), consume)
-            .counting(req.progress.as_deref())
+            .counting(req.progress.as_deref(), req.cancel.as_deref())
     }
 
     fn new(derive: DeriveOptions, slow_wanted: bool, consume: C) -> Self {
         Self {
             derive,
             progress: None,
+            cancel: None,
             jerk: JerkScratch::default(),
             slow_wanted,
             slow: None,
@@ -388,11 +394,17 @@ impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
         }
     }
 
-    fn counting(self, progress: Option<&'p AtomicU64>) -> Self {
-        Self { progress, ..self }
+    /// The feed counting its samples in `progress` and stopping once `cancel` is set.
+    fn counting(self, progress: Option<&'p AtomicU64>, cancel: Option<&'p AtomicBool>) -> Self {
+        Self {
+            progress,
+            cancel,
+            ..self
+        }
     }
 
     fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
+        check_cancel(self.cancel)?;
         rotor_jerk(chunk, &self.derive, &mut self.jerk);
         let (progress, consume) = (self.progress, &mut self.consume);
         let mut deliver = |c: &SampleChunk| {
@@ -524,9 +536,20 @@ fn empty_like(chunk: &SampleChunk) -> SampleChunk {
     empty
 }
 
-fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
+/// Counts `chunk` in the request's progress, after checking its cancellation flag.
+fn count_progress(req: &FitRequest, chunk: &SampleChunk) -> Result<(), Error> {
+    check_cancel(req.cancel.as_deref())?;
     if let Some(p) = &req.progress {
         p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
+    }
+    Ok(())
+}
+
+/// [`RequestError::Cancelled`] once `cancel` is set.
+fn check_cancel(cancel: Option<&AtomicBool>) -> Result<(), Error> {
+    match cancel {
+        Some(c) if c.load(Ordering::Relaxed) => Err(RequestError::Cancelled.into()),
+        _ => Ok(()),
     }
 }
 
@@ -1193,7 +1216,7 @@ fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<L
                 let mut pass = SegmentPass::new(ctx, source, role, start);
                 // Spilled with its Ω̈ (derived in the first pass).
                 spill.stream_chunks(chunks, |chunk| {
-                    count_progress(ctx.req, chunk);
+                    count_progress(ctx.req, chunk)?;
                     pass.push(chunk)
                 })?;
                 pass.finish()
