@@ -138,6 +138,10 @@ pub enum RequestError {
     /// A worker thread stopped without a result (a bug: please report it).
     #[error("a worker thread stopped without a result")]
     WorkerStopped,
+    /// The caller set the request's cancellation flag ([`crate::Identification::cancel`])
+    /// and the fit stopped at the next chunk. The binary never sets it.
+    #[error("the fit was cancelled")]
+    Cancelled,
 }
 
 /// `x` s with at most three decimals.

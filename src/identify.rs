@@ -49,7 +49,7 @@
 //! ```
 
 use std::sync::Arc;
-use std::sync::atomic::AtomicU64;
+use std::sync::atomic::{AtomicBool, AtomicU64};
 
 use nalgebra::DMatrix;
 
@@ -99,6 +99,7 @@ impl Identification {
                 second_pass: true,
                 diagnose: Some(DiagnoseOptions::default()),
                 progress: None,
+                cancel: None,
             },
             bad_samples: None,
         }
@@ -211,6 +212,16 @@ impl Identification {
     /// A counter of the samples read so far (both passes), for a progress display.
     pub fn progress(mut self, counter: Arc<AtomicU64>) -> Self {
         self.request.progress = Some(counter);
+        self
+    }
+
+    /// A cancellation flag: once set (from any thread), `run` stops before the next
+    /// chunk of data it would read or pass and returns
+    /// [`crate::error::RequestError::Cancelled`]. Chunks are [`crate::CHUNK_SAMPLES`]
+    /// samples, so a fit stops within milliseconds while it streams data; estimation
+    /// steps between passes (solves on the merged statistics) run to their end.
+    pub fn cancel(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.request.cancel = Some(flag);
         self
     }
 

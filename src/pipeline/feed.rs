@@ -2,9 +2,10 @@
 //! `predict`/`validate`: Ω̈ derived from Ω̇, progress counted, and the slow rotor thrusts
 //! of a diagnosis or a trim-moment model filled in.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::FitRequest;
+use super::request::check_cancel;
 use crate::error::Error;
 use crate::identified::IdentifiedModel;
 use crate::io::{self, DeriveOptions, Mapping, ReadOptions};
@@ -20,6 +21,7 @@ use crate::slow::SlowThrust;
 pub(super) struct Feed<'p, C> {
     derive: DeriveOptions,
     progress: Option<&'p AtomicU64>,
+    cancel: Option<&'p AtomicBool>,
     jerk: JerkScratch,
     /// The slow rotor thrusts are wanted; the stage once the first chunk is in.
     slow_wanted: bool,
@@ -31,13 +33,14 @@ impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
     /// The feed of a fit: the slow thrusts for a diagnosis.
     pub(super) fn of_fit(req: &'p FitRequest, consume: C) -> Self {
         Self::new(jerk_options(req), req.diagnose.is_some(), consume)
-            .counting(req.progress.as_deref())
+            .counting(req.progress.as_deref(), req.cancel.as_deref())
     }
 
     fn new(derive: DeriveOptions, slow_wanted: bool, consume: C) -> Self {
         Self {
             derive,
             progress: None,
+            cancel: None,
             jerk: JerkScratch::default(),
             slow_wanted,
             slow: None,
@@ -45,11 +48,17 @@ impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
         }
     }
 
-    fn counting(self, progress: Option<&'p AtomicU64>) -> Self {
-        Self { progress, ..self }
+    /// The feed counting its samples in `progress` and stopping once `cancel` is set.
+    fn counting(self, progress: Option<&'p AtomicU64>, cancel: Option<&'p AtomicBool>) -> Self {
+        Self {
+            progress,
+            cancel,
+            ..self
+        }
     }
 
     pub(super) fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
+        check_cancel(self.cancel)?;
         rotor_jerk(chunk, &self.derive, &mut self.jerk);
         let (progress, consume) = (self.progress, &mut self.consume);
         let mut deliver = |c: &SampleChunk| {

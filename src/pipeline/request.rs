@@ -2,7 +2,7 @@
 //! checks that refuse a request before or right after the first pass.
 
 use std::sync::Arc;
-use std::sync::atomic::AtomicU64;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::blocks::TooShort;
 use super::first_pass::LogStats;
@@ -77,6 +77,18 @@ pub struct FitRequest {
     pub diagnose: Option<DiagnoseOptions>,
     /// Samples read so far, over both passes, for a progress display.
     pub progress: Option<Arc<AtomicU64>>,
+    /// Set by the caller to stop the fit: checked before every chunk of every pass
+    /// (where `progress` is counted), the fit then ends with
+    /// [`RequestError::Cancelled`].
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+/// [`RequestError::Cancelled`] once `cancel` is set.
+pub(super) fn check_cancel(cancel: Option<&AtomicBool>) -> Result<(), Error> {
+    match cancel {
+        Some(c) if c.load(Ordering::Relaxed) => Err(RequestError::Cancelled.into()),
+        _ => Ok(()),
+    }
 }
 
 /// Refuses a request that cannot be carried out, before any log is read.

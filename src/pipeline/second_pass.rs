@@ -7,6 +7,7 @@
 use std::sync::atomic::Ordering;
 
 use super::blocks::BlockPlan;
+use super::request::check_cancel;
 use super::first_pass::LogCounts;
 use super::folds::{arrange, local_folds, merge};
 use super::remainder::remainder;
@@ -28,10 +29,13 @@ use crate::source::LogSource;
 use crate::spill::Spill;
 use crate::stats::{Accumulator, stored_columns_of};
 
-pub(super) fn count_progress(req: &FitRequest, chunk: &SampleChunk) {
+/// Counts `chunk` in the request's progress, after checking its cancellation flag.
+pub(super) fn count_progress(req: &FitRequest, chunk: &SampleChunk) -> Result<(), Error> {
+    check_cancel(req.cancel.as_deref())?;
     if let Some(p) = &req.progress {
         p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
     }
+    Ok(())
 }
 
 /// Points kept per plotted series: buckets of the whole run keep their first sample.
@@ -312,7 +316,7 @@ fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<L
                 let mut pass = SegmentPass::new(ctx, source, role, start);
                 // Spilled with its Ω̈ (derived in the first pass).
                 spill.stream_chunks(chunks, |chunk| {
-                    count_progress(ctx.req, chunk);
+                    count_progress(ctx.req, chunk)?;
                     pass.push(chunk)
                 })?;
                 Ok(pass.finish())
