@@ -105,7 +105,7 @@ impl IoError {
     }
 
     /// Short reason name used to count dropped samples ("not finite", …).
-    pub(crate) fn reason(&self) -> &'static str {
+    pub fn reason(&self) -> &'static str {
         match self.kind {
             ErrorKind::Read(_) => "unreadable",
             ErrorKind::Empty => "empty",
