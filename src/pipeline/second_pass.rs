@@ -7,10 +7,10 @@
 use std::sync::atomic::Ordering;
 
 use super::blocks::BlockPlan;
-use super::request::check_cancel;
 use super::first_pass::LogCounts;
 use super::folds::{arrange, local_folds, merge};
 use super::remainder::remainder;
+use super::request::check_cancel;
 use super::segment_pass::SegmentPass;
 use super::split::Role;
 use super::stream::stream_log;
