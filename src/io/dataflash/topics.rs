@@ -52,7 +52,8 @@ pub(super) fn split_key(k: &str) -> Result<(&str, u8), String> {
 }
 
 /// The messages `mapping` maps onto the slots of `layout`. A field is a label of the
-/// signal's `topic` (`GyrX`), or names its own message, `ESC[2].RPM`. A message's time
+/// signal's `topic` (`GyrX`), or names its own message instance, `ESC[2].RPM` (labels
+/// hold no dot). A message's time
 /// is its `[mcap.topic_time]` field, else the `[time]` field, else `TimeUS` (µs).
 pub(super) fn mapped_topics(
     mapping: &Mapping,
