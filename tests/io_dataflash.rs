@@ -36,7 +36,7 @@ fn example() -> Mapping {
 fn flight(params: &[(&str, f64)], rcou: Option<RcouCurve>) -> (SampleChunk, Vec<u8>) {
     let src = analytic_chunk(300, 100.0);
     let sf = [0, 1, 2].map(|a| src.wrench[a].iter().map(|f| f / 1.2).collect::<Vec<_>>());
-    let bytes = write_flight(&src, &sf, params, rcou);
+    let bytes = write_flight(&src, &sf, params, rcou, 2);
     (src, bytes)
 }
 

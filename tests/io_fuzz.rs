@@ -270,8 +270,8 @@ fn fuzz_dataflash_reader() {
     };
     let mapping = Mapping::from_toml_file(Path::new("examples/ardupilot.toml")).unwrap();
     let bases = [
-        fixtures::dataflash::write_flight(&src, &sf, &params, None),
-        fixtures::dataflash::write_flight(&src, &sf, &params, Some(curve)),
+        fixtures::dataflash::write_flight(&src, &sf, &params, None, 2),
+        fixtures::dataflash::write_flight(&src, &sf, &params, Some(curve), 2),
     ];
     let mut rng = rng(6);
     let path = tmp("case.bin");

@@ -58,7 +58,7 @@ pub use layout::LayoutReport;
 pub use mapping::{
     ActuatorMap, BodyFrame, Frames, Mapping, McapOptions, SignalMap, Signals, TopicTime, WorldFrame,
 };
-pub use open::open_log;
+pub use open::{LogFormat, log_format, open_log};
 pub use options::{InvalidSamples, ReadOptions};
 pub use px4::{Px4Rotor, layout_check, rotors_from_parameters, vehicle_skeleton};
 pub use reader::LogReader;

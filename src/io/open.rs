@@ -58,12 +58,12 @@ pub fn open_log(
             ErrorKind::Mapping(format!("max_gap = {} s must be positive", opts.max_gap)),
         ));
     }
-    let magic = sniff(path)
+    let magic = log_format(path)
         .map_err(|e| IoError::new(&file, Location::File, None, ErrorKind::Read(e.to_string())))?;
-    if magic != Magic::Csv {
+    if magic != LogFormat::Csv {
         let what = match magic {
-            Magic::Mcap => "an MCAP",
-            Magic::Ulog => "a ULog",
+            LogFormat::Mcap => "an MCAP",
+            LogFormat::Ulog => "a ULog",
             _ => "an ArduPilot DataFlash",
         };
         let mapping = mapping.ok_or_else(|| {
@@ -86,11 +86,11 @@ pub fn open_log(
             ));
         }
         let (source, layout): (Box<dyn RowSource>, _) = match magic {
-            Magic::Mcap => {
+            LogFormat::Mcap => {
                 let (s, l) = McapSource::open(path, &file, mapping, rotors, align_gap)?;
                 (Box::new(s), l)
             }
-            Magic::Ulog => {
+            LogFormat::Ulog => {
                 let (s, l) = UlogSource::open(path, &file, mapping, rotors, align_gap)?;
                 (Box::new(s), l)
             }
@@ -122,25 +122,29 @@ pub fn open_log(
     ))
 }
 
-/// A log's format, from its first bytes.
+/// A log's format, from its first bytes (or its `.ulg`/`.bin` extension).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Magic {
+pub enum LogFormat {
+    /// CSV text (contract or mapped), possibly gzip-compressed.
     Csv,
+    /// MCAP.
     Mcap,
+    /// PX4 ULog.
     Ulog,
+    /// ArduPilot DataFlash (`.bin`).
     Dataflash,
 }
 
 /// The format of the file by its magic bytes (MCAP, ULog, DataFlash `FMT` head), else
 /// CSV; a `.ulg` file is ULog and a `.bin` file DataFlash whatever its first bytes (so a
 /// corrupt one is told so).
-pub(crate) fn sniff(path: &Path) -> std::io::Result<Magic> {
+pub fn log_format(path: &Path) -> std::io::Result<LogFormat> {
     let ext = |e: &str| path.extension().is_some_and(|x| x.eq_ignore_ascii_case(e));
     if ext("ulg") {
-        return Ok(Magic::Ulog);
+        return Ok(LogFormat::Ulog);
     }
     if ext("bin") {
-        return Ok(Magic::Dataflash);
+        return Ok(LogFormat::Dataflash);
     }
     let mut magic = [0u8; 8];
     let mut f = std::fs::File::open(path)?;
@@ -153,12 +157,12 @@ pub(crate) fn sniff(path: &Path) -> std::io::Result<Magic> {
         n += k;
     }
     Ok(if n >= 5 && &magic[..5] == b"\x89MCAP" {
-        Magic::Mcap
+        LogFormat::Mcap
     } else if n >= 7 && magic[..7] == ulog::MAGIC {
-        Magic::Ulog
+        LogFormat::Ulog
     } else if n >= 3 && magic[..2] == dataflash::HEAD && magic[2] == dataflash::FMT_TYPE {
-        Magic::Dataflash
+        LogFormat::Dataflash
     } else {
-        Magic::Csv
+        LogFormat::Csv
     })
 }
