@@ -206,6 +206,31 @@ fn missing_esc_telemetry_says_what_to_change_on_the_vehicle() {
     }
 }
 
+#[test]
+fn slow_esc_telemetry_says_what_to_change_on_the_vehicle() {
+    // ESC (and EKF) messages at 2 Hz: 0.5 s apart, more than align_gap = 0.3 s.
+    let src = analytic_chunk(300, 100.0);
+    let sf = [0, 1, 2].map(|a| src.wrench[a].clone());
+    let path = write("slow.bin", &write_flight(&src, &sf, &[], None, 50));
+    let mut reader =
+        open_log(&path, &quad(0.0), Some(&example()), &ReadOptions::default()).unwrap();
+    let read: Result<Vec<_>, _> = reader.by_ref().collect();
+    let summary = reader.summary().clone();
+    assert!(
+        read.is_err(),
+        "every sample is unaligned: nothing is left to read"
+    );
+    let dropped = summary.first_dropped.join("\n");
+    for words in [
+        "no messages within align_gap = 0.3 s",
+        "SERVO_BLH_TRATE",
+        "SERVO_BLH_BDMASK",
+        "LOG_BITMASK",
+    ] {
+        assert!(dropped.contains(words), "{words}: {dropped}");
+    }
+}
+
 /// A small valid log: FMT of FMT, one format `TST` (type 20: TimeUS Q, I B, GyrX..Z f),
 /// and `n` messages at 100 Hz.
 fn small(n: usize) -> (DataflashWriter, usize) {

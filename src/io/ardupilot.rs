@@ -23,6 +23,13 @@ pub const MISSING_ROTOR_SPEEDS: &str = "ArduPilot logs ESC messages only with ES
      INS_LOG_BAT_OPT; the SYSID flight mode (SID_AXIS, SID_MAGNITUDE, SID_F_START_HZ, \
      SID_F_STOP_HZ) flies chirps made for identification";
 
+/// Appended to a sample a slow message could not be aligned to: what to change on the
+/// vehicle (or in the mapping) next time.
+pub const SLOW_MESSAGES: &str = " (a message logged slower than that: raise `[mcap] align_gap` \
+     for it, or log it faster next time: ESC telemetry with SERVO_BLH_TRATE >= 50 Hz or \
+     bidirectional DShot (SERVO_BLH_BDMASK), the EKF and IMU with LOG_BITMASK and \
+     LOG_FILE_RATEMAX = 0)";
+
 /// ArduPilot's motors of frame `class`/`frame_type`: (angle from the nose, degrees,
 /// positive right; crate spin), motor 1 first, and the frame's name.
 fn frame(class: u32, frame_type: u32) -> Option<(&'static str, Vec<(f64, f64)>)> {

@@ -6,7 +6,7 @@ use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 
 use super::super::align::{Aligner, Message, TopicSource, base_topic};
-use super::super::ardupilot::MISSING_ROTOR_SPEEDS;
+use super::super::ardupilot::{MISSING_ROTOR_SPEEDS, SLOW_MESSAGES};
 use super::super::error::{ErrorKind, IoError, Location, field};
 use super::super::mapping::{Mapping, Signal};
 use super::super::slots::SlotLayout;
@@ -146,7 +146,7 @@ impl DataflashSource {
 }
 
 impl TopicSource for DataflashSource {
-    const GAP_WORDS: (&'static str, &'static str) = ("align_gap", "");
+    const GAP_WORDS: (&'static str, &'static str) = ("align_gap", SLOW_MESSAGES);
 
     fn aligner(&mut self) -> &mut Aligner {
         &mut self.align
