@@ -2,7 +2,7 @@
 //! message's fields located once its format is known, the mapped fields of each message
 //! of the wanted instance decoded and pushed to the [`Aligner`].
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::BTreeSet;
 use std::path::Path;
 
 use super::super::align::{Aligner, Message, TopicSource, base_topic};
@@ -22,9 +22,9 @@ pub struct DataflashSource {
     layout: SlotLayout,
     topics: Vec<Topic>,
     /// Mapped topics by message type, filled as the formats are defined.
-    by_type: HashMap<u8, Vec<usize>>,
-    /// Names of the message types with data in the log.
-    logged: BTreeSet<String>,
+    by_type: Vec<Vec<usize>>,
+    /// The message types with data in the log.
+    logged: [bool; 256],
     /// Data messages read, of any type.
     data_messages: u64,
     align: Aligner,
@@ -54,8 +54,8 @@ impl DataflashSource {
             mapping: mapping.clone(),
             layout: layout.clone(),
             topics,
-            by_type: HashMap::new(),
-            logged: BTreeSet::new(),
+            by_type: vec![Vec::new(); 256],
+            logged: [false; 256],
             data_messages: 0,
             align: Aligner::new(file, slots, base, align_gap),
         };
@@ -69,12 +69,8 @@ impl DataflashSource {
         let Some(format) = self.reader.formats[ty as usize].as_ref() else {
             return Ok(false);
         };
-        if !self.logged.contains(&format.name) {
-            self.logged.insert(format.name.clone());
-        }
-        let Some(js) = self.by_type.get(&ty) else {
-            return Ok(false);
-        };
+        self.logged[ty as usize] = true;
+        let js = &self.by_type[ty as usize];
         let body = &self.reader.body;
         let mut queued = false;
         for &j in js {
@@ -137,11 +133,10 @@ impl DataflashSource {
         for &j in &js {
             self.topics[j].located = None;
         }
-        self.by_type
-            .retain(|_, v| !v.iter().any(|j| js.contains(j)));
-        if !js.is_empty() {
-            self.by_type.insert(ty, js);
+        for v in &mut self.by_type {
+            v.retain(|j| !js.contains(j));
         }
+        self.by_type[ty as usize] = js;
     }
 }
 
@@ -169,7 +164,11 @@ impl TopicSource for DataflashSource {
 
     fn missing_topic(&self) -> Option<IoError> {
         let t = self.topics.iter().find(|t| t.messages == 0)?;
-        let logged: Vec<&str> = self.logged.iter().map(String::as_str).collect();
+        let logged: BTreeSet<&str> = (0..256)
+            .filter(|&ty| self.logged[ty])
+            .filter_map(|ty| self.reader.formats[ty].as_ref().map(|f| f.name.as_str()))
+            .collect();
+        let logged: Vec<&str> = logged.into_iter().collect();
         let mut text = if self.data_messages == 0 {
             "the log has no data messages".to_string()
         } else if t.seen > 0 {
