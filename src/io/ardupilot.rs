@@ -163,10 +163,10 @@ pub fn actuator_lines(params: &BTreeMap<String, f64>) -> Result<String, String> 
     let lo = p0 + s0 * (p1 - p0);
     let hi = p0 + s1 * (p1 - p0);
     Ok(format!(
-        "[signals.rotor_speeds.actuator]   # MOT_PWM_MIN/MAX {p0}/{p1}, MOT_SPIN_MIN/MAX {s0}/{s1}\n\
+        "[signals.rotor_speeds.actuator]   # MOT_PWM_MIN/MAX {}/{}, MOT_SPIN_MIN/MAX {}/{}\n\
          pwm_min = {}\npwm_max = {}\nthr_mdl_fac = {}            # MOT_THST_EXPO\n\
          # max_speed = 2500.0          # rad/s at MOT_SPIN_MAX  FILL IN (ESC telemetry or a motor test)",
-        lo as f32, hi as f32, e as f32
+        p0 as f32, p1 as f32, s0 as f32, s1 as f32, lo as f32, hi as f32, e as f32
     ))
 }
 
