@@ -533,12 +533,81 @@ pub fn validate(
     Ok(())
 }
 
-/// `mrsysid vehicle --from-ulog`: the vehicle skeleton from PX4's control-allocation
-/// parameters, to `out` or stdout; the notes (what to fill in, the layout check) go to
-/// stderr.
-pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> {
+/// `mrsysid vehicle --from-log`: the vehicle skeleton from a PX4 ULog's
+/// control-allocation parameters or an ArduPilot DataFlash log's frame (with
+/// `arm_length`, m), to `out` or stdout; the notes (what to fill in, the layout check)
+/// go to stderr.
+pub fn vehicle_from_log(
+    log: &Path,
+    arm_length: Option<f64>,
+    out: Option<&Path>,
+) -> Result<(), Failure> {
     let outputs: Vec<(&str, &Path)> = out.iter().map(|p| ("--out", *p)).collect();
-    check_outputs(&outputs, &[("ULog", log)])?;
+    check_outputs(&outputs, &[("log", log)])?;
+    let format = io::log_format(log)
+        .map_err(|e| Failure::input(format!("{}: cannot read: {e}", log.display())))?;
+    match format {
+        io::LogFormat::Dataflash => vehicle_from_dataflash(log, arm_length, out),
+        io::LogFormat::Ulog => vehicle_from_ulog(log, out),
+        _ => Err(Failure::input(format!(
+            "{}: not a PX4 ULog or ArduPilot DataFlash log (`vehicle --from-log` reads the \
+             autopilot's parameters from one)",
+            io::display_name(log)
+        ))),
+    }
+}
+
+/// The ArduPilot skeleton of [`vehicle_from_log`], with the `RCOU` actuator map from the
+/// `MOT_*` parameters in the notes.
+fn vehicle_from_dataflash(
+    log: &Path,
+    arm_length: Option<f64>,
+    out: Option<&Path>,
+) -> Result<(), Failure> {
+    let file = io::display_name(log);
+    let arm = arm_length.ok_or_else(|| {
+        Failure::input(format!(
+            "{file}: an ArduPilot log holds the frame's motor angles (FRAME_CLASS, FRAME_TYPE) \
+             but not its size: give --arm-length M (hub distance from the CG, m)"
+        ))
+    })?;
+    let p = io::read_parameters(log)?;
+    let (rotors, frame) = io::ardupilot_rotors(&p.parameters, arm)
+        .map_err(|m| Failure::input(format!("{file}: {m}")))?;
+    let name = p.firmware.clone().unwrap_or_else(|| file.clone());
+    let text = io::ardupilot_skeleton(&rotors, frame, arm, &name, &file);
+    write_or_print(out, &text)?;
+    let actuator = match io::actuator_lines(&p.parameters) {
+        Ok(lines) => format!(
+            "note: without ESC telemetry, map RCOU C1..C{} as commanded speeds with:\n{lines}",
+            rotors.len()
+        ),
+        Err(m) => format!("note: no actuator map from the MOT_* parameters: {m}"),
+    };
+    print_err(&format!(
+        "note: {} rotors of ArduPilot's {frame} frame from {file}, arm length {arm} m; fill in \
+         mass, inertia, rotor_radius and hub_height (ArduPilot does not log them) before \
+         `mrsysid fit`.\n{actuator}",
+        rotors.len()
+    ));
+    Ok(())
+}
+
+/// The text to `out` (atomically) or stdout.
+fn write_or_print(out: Option<&Path>, text: &str) -> Result<(), Failure> {
+    match out {
+        Some(path) => {
+            write_atomically(path, text.as_bytes())
+                .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
+            print_err(&format!("wrote {}", path.display()));
+        }
+        None => print_out(text)?,
+    }
+    Ok(())
+}
+
+/// The PX4 skeleton of [`vehicle_from_log`].
+fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> {
     let defs = io::read_definitions(log)?;
     let file = io::display_name(log);
     let rotors = io::rotors_from_parameters(&defs.parameters)
@@ -549,14 +618,7 @@ pub fn vehicle_from_ulog(log: &Path, out: Option<&Path>) -> Result<(), Failure> 
         _ => file.clone(),
     };
     let text = io::vehicle_skeleton(&rotors, &name, &file);
-    match out {
-        Some(path) => {
-            write_atomically(path, text.as_bytes())
-                .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
-            print_err(&format!("wrote {}", path.display()));
-        }
-        None => print_out(&text)?,
-    }
+    write_or_print(out, &text)?;
     print_err(&format!(
         "note: {} rotors from CA_ROTOR_* of {file}; fill in mass, inertia, rotor_radius and \
          rotor_inertia (PX4 does not log them) before `mrsysid fit`.\nnote: layout: {}",

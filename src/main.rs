@@ -35,16 +35,22 @@ enum Command {
     Validate(ValidateArgs),
     /// Generate truth data: a response-surface sweep or a flight log (CSV data contract).
     Simulate(SimulateArgs),
-    /// Write a vehicle TOML skeleton from a PX4 ULog's control-allocation parameters
-    /// (rotor positions and spins); mass, inertia and rotor size are left to fill in.
+    /// Write a vehicle TOML skeleton from a PX4 ULog's control-allocation parameters or an
+    /// ArduPilot DataFlash log's FRAME_CLASS/FRAME_TYPE (rotor positions and spins); mass,
+    /// inertia and rotor size are left to fill in.
     Vehicle(VehicleArgs),
 }
 
 #[derive(clap::Args)]
 struct VehicleArgs {
-    /// PX4 ULog file whose CA_ROTOR_* parameters give the rotor layout.
+    /// PX4 ULog (CA_ROTOR_* parameters) or ArduPilot DataFlash `.bin` log
+    /// (FRAME_CLASS/FRAME_TYPE) whose parameters give the rotor layout.
+    #[arg(long, alias = "from-ulog")]
+    from_log: PathBuf,
+    /// Arm length, m (hub distance from the CG): needed for ArduPilot logs, which hold
+    /// the frame's motor angles but not its size.
     #[arg(long)]
-    from_ulog: PathBuf,
+    arm_length: Option<f64>,
     /// Output TOML file (written atomically; stdout when absent).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -276,7 +282,9 @@ fn main() -> ExitCode {
             args.json.as_deref(),
         ),
         Command::Simulate(args) => simulate(&args),
-        Command::Vehicle(args) => commands::vehicle_from_ulog(&args.from_ulog, args.out.as_deref()),
+        Command::Vehicle(args) => {
+            commands::vehicle_from_log(&args.from_log, args.arm_length, args.out.as_deref())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

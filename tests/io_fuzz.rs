@@ -1,6 +1,6 @@
 //! Mutation fuzzing of every parser of the io module: CSV reader (both policies),
 //! mapping TOML, vehicle TOML, MCAP reader (JSON and CDR), CDR decoder, ros2msg schema
-//! parser, ULog reader and definitions reader. Valid inputs are mutated (byte flips, deletions, insertions of hostile tokens,
+//! parser, ULog reader and definitions reader, DataFlash reader and parameter reader. Valid inputs are mutated (byte flips, deletions, insertions of hostile tokens,
 //! duplication, truncation); every case must return Ok or an error — never panic.
 //!
 //! CI runs a few thousand cases (well under 20 s); set `MRSYSID_FUZZ_CASES` to run
@@ -18,7 +18,9 @@ use mrsysid::io::fixtures;
 use mrsysid::io::fixtures::mcap::{Encoding, write_samples, written_mapping};
 use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::internals::{decode_cdr as decode, parse_ros2_schema as parse_schema};
-use mrsysid::io::{InvalidSamples, Mapping, ReadOptions, open_log, read_definitions};
+use mrsysid::io::{
+    InvalidSamples, Mapping, ReadOptions, open_log, read_definitions, read_parameters,
+};
 use mrsysid::vehicle::{Vehicle, VehicleSource};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
@@ -247,6 +249,47 @@ fn fuzz_ulog_reader() {
             no_panic("ulog", case, &input, || {
                 drain(&path, &vehicle, Some(mapping), &ReadOptions::default());
                 let _ = read_definitions(&path);
+            });
+        }
+    }
+}
+
+/// DataFlash: a written flight (ESC telemetry, and RCOU instead) through the shipped
+/// mapping, and the parameter reader, over truncations and mutations.
+#[test]
+fn fuzz_dataflash_reader() {
+    let vehicle = quad(0.0);
+    let src = analytic_chunk(30, 100.0);
+    let sf = [0, 1, 2].map(|a| src.wrench[a].clone());
+    let params = [("FRAME_CLASS", 1.0), ("FRAME_TYPE", 1.0)];
+    let curve = fixtures::dataflash::RcouCurve {
+        pwm_min: 1150.0,
+        pwm_max: 1950.0,
+        expo: 0.65,
+        max_speed: 2500.0,
+    };
+    let mapping = Mapping::from_toml_file(Path::new("examples/ardupilot.toml")).unwrap();
+    let bases = [
+        fixtures::dataflash::write_flight(&src, &sf, &params, None, 2),
+        fixtures::dataflash::write_flight(&src, &sf, &params, Some(curve), 2),
+    ];
+    let mut rng = rng(6);
+    let path = tmp("case.bin");
+    for base in &bases {
+        // Every truncation point of the first 2 kB (the metadata), then mutations.
+        for cut in (0..base.len().min(2048)).step_by(7) {
+            std::fs::write(&path, &base[..cut]).unwrap();
+            no_panic("dataflash-cut", cut, &base[..cut], || {
+                drain(&path, &vehicle, Some(&mapping), &ReadOptions::default());
+                let _ = read_parameters(&path);
+            });
+        }
+        for case in 0..cases(800) {
+            let input = mutate(&mut rng, base);
+            std::fs::write(&path, &input).unwrap();
+            no_panic("dataflash", case, &input, || {
+                drain(&path, &vehicle, Some(&mapping), &ReadOptions::default());
+                let _ = read_parameters(&path);
             });
         }
     }

@@ -1,4 +1,5 @@
-//! Log ingestion: contract and mapped CSV, MCAP (JSON and ROS 2 CDR) and PX4 ULog, turned
+//! Log ingestion: contract and mapped CSV, MCAP (JSON and ROS 2 CDR), PX4 ULog and
+//! ArduPilot DataFlash, turned
 //! into the [`SampleChunk`](crate::sample::SampleChunk) stream of the data contract
 //! (`docs/data-contract.md`), streaming in bounded memory.
 //!
@@ -13,14 +14,18 @@
 //! The front: [`open_log`] gives a [`LogReader`] (chunks, then a [`Summary`]), chosen by
 //! [`ReadOptions`] and a [`Mapping`] file's contents; every error is an [`IoError`].
 //! [`read_definitions`] and the PX4 helpers ([`rotors_from_parameters`],
-//! [`vehicle_skeleton`]) serve `mrsysid vehicle --from-ulog`. The submodules are
+//! [`vehicle_skeleton`]), [`read_parameters`] and the ArduPilot helpers
+//! ([`ardupilot_rotors`], [`ardupilot_skeleton`], [`actuator_lines`]) serve
+//! `mrsysid vehicle --from-log`. The submodules are
 //! private; [`internals`] holds the two decoders the fuzz tests and benchmarks drive
 //! directly, and `fixtures` (cargo feature `fixtures`, tests only) the log writers.
 
 mod align;
+mod ardupilot;
 mod cdr;
 mod contract_csv;
 mod csv_input;
+mod dataflash;
 mod decimal;
 mod derive;
 mod error;
@@ -44,14 +49,16 @@ mod ulog;
 mod units;
 mod validate;
 
+pub use ardupilot::{MISSING_ROTOR_SPEEDS, actuator_lines, ardupilot_rotors, ardupilot_skeleton};
 pub use contract_csv::DEFAULT_RANGE_BYTES;
+pub use dataflash::{LogParameters, read_parameters};
 pub use derive::DeriveOptions;
 pub use error::{ErrorKind, IoError, Location, display_name};
 pub use layout::LayoutReport;
 pub use mapping::{
     ActuatorMap, BodyFrame, Frames, Mapping, McapOptions, SignalMap, Signals, TopicTime, WorldFrame,
 };
-pub use open::open_log;
+pub use open::{LogFormat, log_format, open_log};
 pub use options::{InvalidSamples, ReadOptions};
 pub use px4::{Px4Rotor, layout_check, rotors_from_parameters, vehicle_skeleton};
 pub use reader::LogReader;

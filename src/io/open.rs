@@ -6,6 +6,7 @@ use std::path::Path;
 
 use super::MAX_ROTORS;
 use super::contract_csv::CsvSource;
+use super::dataflash::{self, DataflashSource};
 use super::error::{self, ErrorKind, IoError, Location};
 use super::mapping::Mapping;
 use super::mcap_read::McapSource;
@@ -15,9 +16,10 @@ use super::row_source::RowSource;
 use super::ulog::{self, UlogSource};
 use crate::vehicle::Vehicle;
 
-/// Opens a CSV (contract or mapped), MCAP or ULog log for streaming; the format is
-/// chosen by the MCAP or ULog magic bytes. `mapping` is required for MCAP and ULog and
-/// for CSV files that do not follow the contract.
+/// Opens a CSV (contract or mapped), MCAP, ULog or DataFlash log for streaming; the
+/// format is chosen by the MCAP or ULog magic bytes or the DataFlash head bytes of a
+/// leading `FMT` message. `mapping` is required for MCAP, ULog and DataFlash and for CSV
+/// files that do not follow the contract.
 pub fn open_log(
     path: &Path,
     vehicle: &Vehicle,
@@ -56,13 +58,13 @@ pub fn open_log(
             ErrorKind::Mapping(format!("max_gap = {} s must be positive", opts.max_gap)),
         ));
     }
-    let magic = sniff(path)
+    let magic = log_format(path)
         .map_err(|e| IoError::new(&file, Location::File, None, ErrorKind::Read(e.to_string())))?;
-    if magic != Magic::Csv {
-        let what = if magic == Magic::Mcap {
-            "an MCAP"
-        } else {
-            "a ULog"
+    if magic != LogFormat::Csv {
+        let what = match magic {
+            LogFormat::Mcap => "an MCAP",
+            LogFormat::Ulog => "a ULog",
+            _ => "an ArduPilot DataFlash",
         };
         let mapping = mapping.ok_or_else(|| {
             IoError::new(
@@ -83,12 +85,19 @@ pub fn open_log(
                 ErrorKind::Mapping(format!("align_gap = {align_gap} s must be positive")),
             ));
         }
-        let (source, layout): (Box<dyn RowSource>, _) = if magic == Magic::Mcap {
-            let (s, l) = McapSource::open(path, &file, mapping, rotors, align_gap)?;
-            (Box::new(s), l)
-        } else {
-            let (s, l) = UlogSource::open(path, &file, mapping, rotors, align_gap)?;
-            (Box::new(s), l)
+        let (source, layout): (Box<dyn RowSource>, _) = match magic {
+            LogFormat::Mcap => {
+                let (s, l) = McapSource::open(path, &file, mapping, rotors, align_gap)?;
+                (Box::new(s), l)
+            }
+            LogFormat::Ulog => {
+                let (s, l) = UlogSource::open(path, &file, mapping, rotors, align_gap)?;
+                (Box::new(s), l)
+            }
+            _ => {
+                let (s, l) = DataflashSource::open(path, &file, mapping, rotors, align_gap)?;
+                (Box::new(s), l)
+            }
         };
         return Ok(LogReader::new(
             source, layout, mapping, vehicle, opts, &file, true,
@@ -113,22 +122,29 @@ pub fn open_log(
     ))
 }
 
-/// A log's format, from its first bytes.
+/// A log's format, from its first bytes (or its `.ulg`/`.bin` extension).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Magic {
+pub enum LogFormat {
+    /// CSV text (contract or mapped), possibly gzip-compressed.
     Csv,
+    /// MCAP.
     Mcap,
+    /// PX4 ULog.
     Ulog,
+    /// ArduPilot DataFlash (`.bin`).
+    Dataflash,
 }
 
-/// The format of the file by its magic bytes (MCAP, ULog), else CSV; a `.ulg` file is
-/// ULog whatever its first bytes (so a corrupt one is told so).
-fn sniff(path: &Path) -> std::io::Result<Magic> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("ulg"))
-    {
-        return Ok(Magic::Ulog);
+/// The format of the file by its magic bytes (MCAP, ULog, DataFlash `FMT` head), else
+/// CSV; a `.ulg` file is ULog and a `.bin` file DataFlash whatever its first bytes (so a
+/// corrupt one is told so).
+pub fn log_format(path: &Path) -> std::io::Result<LogFormat> {
+    let ext = |e: &str| path.extension().is_some_and(|x| x.eq_ignore_ascii_case(e));
+    if ext("ulg") {
+        return Ok(LogFormat::Ulog);
+    }
+    if ext("bin") {
+        return Ok(LogFormat::Dataflash);
     }
     let mut magic = [0u8; 8];
     let mut f = std::fs::File::open(path)?;
@@ -141,10 +157,12 @@ fn sniff(path: &Path) -> std::io::Result<Magic> {
         n += k;
     }
     Ok(if n >= 5 && &magic[..5] == b"\x89MCAP" {
-        Magic::Mcap
+        LogFormat::Mcap
     } else if n >= 7 && magic[..7] == ulog::MAGIC {
-        Magic::Ulog
+        LogFormat::Ulog
+    } else if n >= 3 && magic[..2] == dataflash::HEAD && magic[2] == dataflash::FMT_TYPE {
+        LogFormat::Dataflash
     } else {
-        Magic::Csv
+        LogFormat::Csv
     })
 }

@@ -120,7 +120,13 @@ pub fn layout_check(rotors: &[Px4Rotor]) -> String {
             spin: if r.km < 0.0 { 1.0 } else { -1.0 },
         })
         .collect();
-    match RotorLayout::check(&table) {
+    layout_words(&table)
+}
+
+/// Whether the rotor table satisfies Assumption 2, is accepted as a general planar
+/// layout, or is refused, in words (PX4 and ArduPilot skeletons).
+pub(crate) fn layout_words(table: &[Rotor]) -> String {
+    match RotorLayout::check(table) {
         Ok(layout) if layout.breaches.is_empty() => format!(
             "satisfies Assumption 2 (arm length {:.4} m, {:?})",
             layout.arm_length, layout.class
