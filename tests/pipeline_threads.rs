@@ -48,6 +48,7 @@ fn request(logs: &[&Path], validate: &[&Path], threads: usize) -> FitRequest {
         second_pass: true,
         diagnose: Some(DiagnoseOptions::default()),
         progress: None,
+        loads_low_pass_hz: None,
     }
 }
 
