@@ -135,6 +135,7 @@ pub struct FitCommand {
     pub drop_invalid: bool,
     pub validate: Vec<PathBuf>,
     pub holdout: Holdout,
+    pub loads_low_pass: Option<f64>,
     pub json: Option<PathBuf>,
     pub model_out: Option<PathBuf>,
     pub plots: Option<PathBuf>,
@@ -212,6 +213,9 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
     }
     if let Some(threads) = cmd.threads {
         job = job.threads(threads);
+    }
+    if let Some(hz) = cmd.loads_low_pass {
+        job = job.loads_low_pass(hz);
     }
     let results = with_progress(job, cmd.quiet, |job| job.run())?;
     let report = results.report();

@@ -125,6 +125,12 @@ pub enum RequestError {
         /// Guard given, s.
         guard_seconds: f64,
     },
+    /// A loads low-pass cut-off that is not a positive number of Hz.
+    #[error("the loads' low-pass cut-off must be a positive number of Hz (got {hz})")]
+    InvalidLoadsLowPass {
+        /// Cut-off given, Hz.
+        hz: f64,
+    },
     /// The model structure was built for another vehicle.
     #[error(
         "the model structure is for {structure} rotors but the vehicle has {vehicle}: build it from this vehicle"

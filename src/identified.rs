@@ -46,6 +46,10 @@ struct ModelFile {
     /// absent in files written without it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     covariance: Option<Vec<Vec<f64>>>,
+    /// The cut-off (Hz) at which the fit logs' loads were low-passed and the regressor
+    /// signals with them; absent when they were not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    loads_low_pass_hz: Option<f64>,
 }
 
 /// A parameter's columns on one axis, left out of the model.
@@ -117,6 +121,11 @@ pub struct IdentifiedModel {
     /// when it comes from [`crate::Results::to_identified_model`]), for prediction
     /// intervals; `None` when not known.
     pub covariance: Option<DMatrix<f64>>,
+    /// The cut-off (Hz) at which the fit logs' loads had been low-passed, the regressor
+    /// signals with them (consistent filtering, [`crate::io::LoadsProcessing`]);
+    /// `predict`/`validate` on logs filter alike unless their mapping says otherwise.
+    /// `None`: not filtered.
+    pub loads_low_pass_hz: Option<f64>,
 }
 
 impl IdentifiedModel {
@@ -139,6 +148,7 @@ impl IdentifiedModel {
             structure,
             parameters,
             covariance: None,
+            loads_low_pass_hz: None,
         }
     }
 
@@ -209,6 +219,7 @@ impl IdentifiedModel {
             structure,
             parameters: file.parameters,
             covariance,
+            loads_low_pass_hz: file.loads_low_pass_hz,
         })
     }
 
@@ -271,6 +282,7 @@ impl IdentifiedModel {
                     .map(|i| c.row(i).iter().copied().collect())
                     .collect()
             }),
+            loads_low_pass_hz: self.loads_low_pass_hz,
         };
         let text = toml::to_string(&file).map_err(|e| err(e.to_string()))?;
         write_atomically(path, text.as_bytes()).map_err(|e| err(format!("cannot write file: {e}")))

@@ -100,6 +100,7 @@ impl Identification {
                 diagnose: Some(DiagnoseOptions::default()),
                 progress: None,
                 cancel: None,
+                loads_low_pass_hz: None,
             },
             bad_samples: None,
         }
@@ -177,6 +178,15 @@ impl Identification {
         self
     }
 
+    /// The logs' loads were low-passed at `hz` (−3 dB, Hz, > 0) when they were made: the
+    /// regressor signals pass through the same kind of zero-phase filter (consistent
+    /// filtering; overrides a mapping file's `[loads] low_pass_hz`). The final model
+    /// remembers it, so `predict`/`validate` on logs made the same way filter alike.
+    pub fn loads_low_pass(mut self, hz: f64) -> Self {
+        self.request.loads_low_pass_hz = Some(hz);
+        self
+    }
+
     /// Hold-out segments of a single fit log.
     pub fn holdout(mut self, holdout: Holdout) -> Self {
         self.request.holdout = holdout;
@@ -245,6 +255,7 @@ impl Identification {
             vehicle: self.request.vehicle.clone(),
             base: self.request.structure.clone(),
             outcome,
+            loads_low_pass_hz: self.request.effective_loads_low_pass(),
         })
     }
 }
@@ -294,6 +305,8 @@ pub struct Results {
     vehicle: Vehicle,
     base: ModelStructure,
     outcome: FitOutcome,
+    /// The cut-off the regressor signals were low-passed at, Hz.
+    loads_low_pass_hz: Option<f64>,
 }
 
 impl Results {
@@ -452,7 +465,7 @@ impl Results {
     /// `docs/report-schema.md`).
     pub fn report(&self) -> Report {
         let o = &self.outcome;
-        Report::new(
+        let mut report = Report::new(
             &self.vehicle,
             &self.base,
             &o.fit,
@@ -462,7 +475,9 @@ impl Results {
             (&o.cross_validation.0, &o.cross_validation.1),
             o.diagnostics.as_ref(),
             o.diagnosis.as_ref(),
-        )
+        );
+        report.loads_low_pass_hz = self.loads_low_pass_hz;
+        report
     }
 
     /// The paper-style tables of `mrsysid fit` (FSOA, MMR estimates, fit metrics,
@@ -546,12 +561,14 @@ impl Results {
         let n = self.structure().params.len();
         let cov = self.covariance();
         let std: Vec<f64> = (0..n).map(|i| cov[(i, i)].sqrt()).collect();
-        IdentifiedModel::new(
+        let mut model = IdentifiedModel::new(
             self.vehicle.clone(),
             self.structure().clone(),
             self.theta(),
             &std,
         )
-        .with_covariance(cov)
+        .with_covariance(cov);
+        model.loads_low_pass_hz = self.loads_low_pass_hz;
+        model
     }
 }

@@ -64,9 +64,11 @@
 #![warn(missing_docs)]
 
 pub mod airframe;
+mod consistent_filter;
 pub mod diagnose;
 pub mod error;
 pub mod estimate;
+mod held;
 pub mod identified;
 pub mod identify;
 pub mod inputs;

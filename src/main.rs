@@ -106,6 +106,12 @@ struct FitArgs {
     /// samples).
     #[arg(long, default_value_t = Holdout::DEFAULT.guard_seconds)]
     holdout_guard: f64,
+    /// The logs' forces and moments were low-passed at this cut-off (Hz) when they were
+    /// made (e.g. from accelerations through a zero-phase filter, or a smoothing
+    /// spline): the regressor signals pass through the same kind of filter (consistent
+    /// filtering; as `[loads] low_pass_hz` in a mapping file). The model file keeps it.
+    #[arg(long, value_name = "HZ")]
+    loads_low_pass: Option<f64>,
     /// Write the JSON report here.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -339,6 +345,7 @@ impl FitArgs {
                 blocks: self.holdout_blocks,
                 guard_seconds: self.holdout_guard,
             },
+            loads_low_pass: self.loads_low_pass,
             json: self.json.clone(),
             model_out: self.model_out.clone(),
             plots: self.plots.clone(),

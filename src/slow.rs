@@ -9,8 +9,7 @@
 //! say so. The low-pass is zero-phase ([`crate::smooth`]): it is the slow part around
 //! each sample, not a response to rotor speeds later than the load.
 
-use std::collections::VecDeque;
-
+use crate::held::HeldChunks;
 use crate::sample::SampleChunk;
 use crate::smooth::LowPass;
 
@@ -25,10 +24,8 @@ pub(crate) struct SlowThrust {
     /// One low-pass per band, one channel per rotor.
     bands: Vec<LowPass>,
     rotors: usize,
-    /// Chunks held, oldest first.
-    held: VecDeque<SampleChunk>,
-    /// Per band: samples of the held chunks already filled, counted from the oldest.
-    filled: Vec<usize>,
+    /// Chunks held; one filter per band.
+    held: HeldChunks,
     /// Ω_i² of the sample being pushed.
     squares: Vec<f64>,
 }
@@ -42,8 +39,7 @@ impl SlowThrust {
                 .map(|&f| LowPass::new(f, rotors))
                 .collect(),
             rotors,
-            held: VecDeque::new(),
-            filled: vec![0; TRIM_BANDS_HZ.len()],
+            held: HeldChunks::new(TRIM_BANDS_HZ.len()),
             squares: vec![0.0; rotors],
         }
     }
@@ -62,17 +58,16 @@ impl SlowThrust {
             v.clear();
             v.resize(n, 0.0);
         }
-        self.held.push_back(chunk);
-        let last = self.held.len() - 1;
+        self.held.push(chunk);
         for k in 0..n {
-            let chunk = &self.held[last];
+            let chunk = self.held.newest();
             for (sq, w) in self.squares.iter_mut().zip(&chunk.omega) {
                 *sq = w[k] * w[k];
             }
             let t = chunk.t[k];
             self.filter(|lp, squares, store| lp.push(t, squares, store));
         }
-        self.hand_on(false, out)
+        self.held.hand_on(false, out)
     }
 
     /// The stream ended: completes and hands on every chunk held.
@@ -81,7 +76,7 @@ impl SlowThrust {
         out: impl FnMut(SampleChunk) -> Result<(), E>,
     ) -> Result<(), E> {
         self.filter(|lp, _, store| lp.finish(store));
-        self.hand_on(true, out)
+        self.held.hand_on(true, out)
     }
 
     /// Runs `step` on each band's low-pass, storing what it outputs in the held chunks.
@@ -90,44 +85,17 @@ impl SlowThrust {
             bands,
             rotors,
             held,
-            filled,
             squares,
         } = self;
         for (b, lp) in bands.iter_mut().enumerate() {
-            let cursor = &mut filled[b];
             let mut store = |_: f64, y: &[f64]| {
-                let (mut chunk, mut k) = (0, *cursor);
-                while k >= held[chunk].len() {
-                    k -= held[chunk].len();
-                    chunk += 1;
-                }
+                let (chunk, k) = held.next_slot(b);
                 for (i, &v) in y.iter().enumerate() {
-                    held[chunk].omega_squared_slow[b * *rotors + i][k] = v;
+                    chunk.omega_squared_slow[b * *rotors + i][k] = v;
                 }
-                *cursor += 1;
             };
             step(lp, squares, &mut store);
         }
-    }
-
-    /// Hands on the held chunks that every band has filled (all of them when `end`).
-    fn hand_on<E>(
-        &mut self,
-        end: bool,
-        mut out: impl FnMut(SampleChunk) -> Result<(), E>,
-    ) -> Result<(), E> {
-        while let Some(front) = self.held.front() {
-            let n = front.len();
-            if !end && self.filled.iter().any(|&f| f < n) {
-                break;
-            }
-            let chunk = self.held.pop_front().expect("a chunk is held");
-            for f in self.filled.iter_mut() {
-                *f -= n;
-            }
-            out(chunk)?;
-        }
-        Ok(())
     }
 }
 

@@ -49,6 +49,7 @@ fn request(logs: &[&Path], validate: &[&Path], threads: usize) -> FitRequest {
         diagnose: Some(DiagnoseOptions::default()),
         progress: None,
         cancel: None,
+        loads_low_pass_hz: None,
     }
 }
 

@@ -27,6 +27,7 @@ def fit(
     drop_invalid: bool = False,
     holdout_blocks: int = 5,
     holdout_guard: float = 2.0,
+    loads_low_pass: Optional[float] = None,
     residual_pass: bool = True,
 ) -> Results:
     """Identifies the vehicle's model from logs: FSOA term ordering, the multivariate
@@ -56,6 +57,10 @@ def fit(
             blocks, each held out in turn.
         holdout_guard: time on each side of a held-out block that its fold neither
             fits nor scores, s.
+        loads_low_pass: the logs' forces and moments were low-passed at this cut-off
+            (Hz) when they were made (from accelerations through a zero-phase filter, or
+            a smoothing spline): the regressor signals pass through the same kind of
+            filter (consistent filtering; as ``[loads] low_pass_hz`` in a mapping file).
         residual_pass: run the second pass (residual diagnostics and the
             coloured-residual correction of σ); the diagnosis runs it regardless.
 
@@ -89,6 +94,7 @@ def fit(
         drop_invalid=drop_invalid,
         holdout_blocks=holdout_blocks,
         holdout_guard=holdout_guard,
+        loads_low_pass=loads_low_pass,
         residual_pass=residual_pass,
     )
     return Results(native)

@@ -81,6 +81,7 @@ def fit(
     drop_invalid: bool,
     holdout_blocks: int,
     holdout_guard: float,
+    loads_low_pass: Optional[float],
     residual_pass: bool,
 ) -> Results:
     """Runs the fit with the GIL released; Ctrl-C raises ``KeyboardInterrupt``."""

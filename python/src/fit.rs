@@ -27,7 +27,7 @@ const SIGNAL_POLL: Duration = Duration::from_millis(50);
 #[pyfunction]
 #[pyo3(signature = (
     vehicle, *, logs, tables, validate_logs, validate_tables, mapping, diagnose, threads,
-    inflow, linear_vh, rotor_inertia, drop_invalid, holdout_blocks, holdout_guard, residual_pass
+    inflow, linear_vh, rotor_inertia, drop_invalid, holdout_blocks, holdout_guard, loads_low_pass, residual_pass
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
@@ -46,6 +46,7 @@ pub fn fit<'py>(
     drop_invalid: bool,
     holdout_blocks: usize,
     holdout_guard: f64,
+    loads_low_pass: Option<f64>,
     residual_pass: bool,
 ) -> PyResult<Results> {
     let options = ModelOptions {
@@ -71,6 +72,9 @@ pub fn fit<'py>(
         .diagnose(diagnose)
         .residual_pass(residual_pass)
         .logs(logs);
+    if let Some(hz) = loads_low_pass {
+        job = job.loads_low_pass(hz);
+    }
     for log in validate_logs {
         job = job.validate(log);
     }

@@ -287,6 +287,19 @@ pub struct TopicTime {
     pub unit: Option<String>,
 }
 
+/// How a log's forces and moments were processed when the log was made, so that the
+/// regressors can see the same processing (`[loads]` in a mapping file).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadsProcessing {
+    /// The loads were low-passed at this −3 dB cut-off, Hz (> 0): forces and moments from
+    /// accelerations through a zero-phase low-pass, or a smoothing spline of about this
+    /// bandwidth. The velocity, rates, rotor speeds and rotor accelerations then pass
+    /// through the crate's zero-phase low-pass at the same cut-off before the regressors
+    /// are built from them (consistent filtering).
+    pub low_pass_hz: f64,
+}
+
 /// A parsed mapping file.
 #[derive(Debug, Clone, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -301,6 +314,8 @@ pub struct Mapping {
     pub signals: Signals,
     /// Derivation options, overriding those of the read options.
     pub derive: Option<DeriveOptions>,
+    /// How the log's loads were processed when it was made (e.g. smoothed).
+    pub loads: Option<LoadsProcessing>,
     /// Options of topic-based logs (MCAP and ULog).
     #[serde(default)]
     pub mcap: McapOptions,
@@ -423,6 +438,19 @@ impl Mapping {
                 ErrorKind::Format(e.message().trim().to_string()),
             )
         })?;
+        if let Some(l) = mapping.loads
+            && !(l.low_pass_hz.is_finite() && l.low_pass_hz > 0.0)
+        {
+            return Err(IoError::new(
+                name,
+                Location::File,
+                key("loads.low_pass_hz"),
+                ErrorKind::Mapping(format!(
+                    "the loads' low-pass cut-off must be a positive number of Hz, not {}",
+                    l.low_pass_hz
+                )),
+            ));
+        }
         for signal in Signal::ALL {
             if let Some(map) = mapping.get(signal) {
                 check_signal_map(signal, map).map_err(|m| {

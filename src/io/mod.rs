@@ -56,7 +56,8 @@ pub use derive::DeriveOptions;
 pub use error::{ErrorKind, IoError, Location, display_name};
 pub use layout::LayoutReport;
 pub use mapping::{
-    ActuatorMap, BodyFrame, Frames, Mapping, McapOptions, SignalMap, Signals, TopicTime, WorldFrame,
+    ActuatorMap, BodyFrame, Frames, LoadsProcessing, Mapping, McapOptions, SignalMap, Signals,
+    TopicTime, WorldFrame,
 };
 pub use open::{LogFormat, log_format, open_log};
 pub use options::{InvalidSamples, ReadOptions};

@@ -1,11 +1,13 @@
 //! The Feed stage between a log's reader and its consumer, the same for a fit and for
-//! `predict`/`validate`: Ω̈ derived from Ω̇, progress counted, and the slow rotor thrusts
-//! of a diagnosis or a trim-moment model filled in.
+//! `predict`/`validate`: the regressor signals filtered as the loads were, Ω̈ derived from
+//! Ω̇, progress counted, and the slow rotor thrusts of a diagnosis or a trim-moment model
+//! filled in.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use super::FitRequest;
 use super::request::check_cancel;
+use crate::consistent_filter::ConsistentFilter;
 use crate::error::Error;
 use crate::identified::IdentifiedModel;
 use crate::io::{self, DeriveOptions, Mapping, ReadOptions};
@@ -13,14 +15,23 @@ use crate::io::{JerkScratch, rotor_jerk};
 use crate::sample::SampleChunk;
 use crate::slow::SlowThrust;
 
-/// What happens to each chunk of a log before its consumer sees it: Ω̈ derived from Ω̇
-/// ([`rotor_jerk`]), progress counted and, for a diagnosis or a model with a trim
-/// moment, the slow rotor thrusts filled in ([`SlowThrust`]; chunks then reach the
-/// consumer up to a few seconds of samples later, in order, the last ones at
-/// [`Feed::finish`]).
+/// What happens to each chunk of a log before its consumer sees it: the regressor
+/// signals low-passed as the loads were when the log was made ([`ConsistentFilter`],
+/// when declared), Ω̈ derived from Ω̇ ([`rotor_jerk`]), progress counted and, for a
+/// diagnosis or a model with a trim moment, the slow rotor thrusts filled in
+/// ([`SlowThrust`]). With either filter, chunks reach the consumer up to a few seconds of
+/// samples later, in order, the last ones at [`Feed::finish`].
 pub(super) struct Feed<'p, C> {
+    /// The consistent filter, when the loads were smoothed.
+    filter: Option<ConsistentFilter>,
+    after: AfterFilter<'p, C>,
+}
+
+/// The Feed's stages after the consistent filter.
+struct AfterFilter<'p, C> {
     derive: DeriveOptions,
     progress: Option<&'p AtomicU64>,
+    /// Set by the caller to stop the fit.
     cancel: Option<&'p AtomicBool>,
     jerk: JerkScratch,
     /// The slow rotor thrusts are wanted; the stage once the first chunk is in.
@@ -30,35 +41,56 @@ pub(super) struct Feed<'p, C> {
 }
 
 impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
-    /// The feed of a fit: the slow thrusts for a diagnosis.
+    /// The feed of a fit: the consistent filter of the request's loads, the slow thrusts
+    /// for a diagnosis.
     pub(super) fn of_fit(req: &'p FitRequest, consume: C) -> Self {
-        Self::new(jerk_options(req), req.diagnose.is_some(), consume)
-            .counting(req.progress.as_deref(), req.cancel.as_deref())
-    }
-
-    fn new(derive: DeriveOptions, slow_wanted: bool, consume: C) -> Self {
-        Self {
-            derive,
-            progress: None,
-            cancel: None,
-            jerk: JerkScratch::default(),
-            slow_wanted,
-            slow: None,
+        let mut feed = Self::new(
+            jerk_options(req),
+            req.effective_loads_low_pass(),
+            req.diagnose.is_some(),
             consume,
-        }
+        );
+        feed.after.progress = req.progress.as_deref();
+        feed.after.cancel = req.cancel.as_deref();
+        feed
     }
 
-    /// The feed counting its samples in `progress` and stopping once `cancel` is set.
-    fn counting(self, progress: Option<&'p AtomicU64>, cancel: Option<&'p AtomicBool>) -> Self {
+    fn new(derive: DeriveOptions, low_pass: Option<f64>, slow_wanted: bool, consume: C) -> Self {
         Self {
-            progress,
-            cancel,
-            ..self
+            filter: low_pass.map(ConsistentFilter::new),
+            after: AfterFilter {
+                derive,
+                progress: None,
+                cancel: None,
+                jerk: JerkScratch::default(),
+                slow_wanted,
+                slow: None,
+                consume,
+            },
         }
     }
 
     pub(super) fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
-        check_cancel(self.cancel)?;
+        check_cancel(self.after.cancel)?;
+        let Self { filter, after } = self;
+        match filter {
+            None => after.push(chunk),
+            // A copy is held: the reader's chunk goes back to it.
+            Some(f) => f.push(chunk.clone(), |mut c| after.push(&mut c)),
+        }
+    }
+
+    pub(super) fn finish(&mut self) -> Result<(), Error> {
+        let Self { filter, after } = self;
+        if let Some(f) = filter {
+            f.finish(|mut c| after.push(&mut c))?;
+        }
+        after.finish()
+    }
+}
+
+impl<C: FnMut(&SampleChunk) -> Result<(), Error>> AfterFilter<'_, C> {
+    fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
         rotor_jerk(chunk, &self.derive, &mut self.jerk);
         let (progress, consume) = (self.progress, &mut self.consume);
         let mut deliver = |c: &SampleChunk| {
@@ -72,11 +104,10 @@ impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
         }
         let rotors = chunk.rotor_count();
         let stage = self.slow.get_or_insert_with(|| SlowThrust::new(rotors));
-        // A copy is held: the reader's chunk goes back to it.
         stage.push(chunk.clone(), |c| deliver(&c))
     }
 
-    pub(super) fn finish(&mut self) -> Result<(), Error> {
+    fn finish(&mut self) -> Result<(), Error> {
         let (progress, consume) = (self.progress, &mut self.consume);
         match self.slow.as_mut() {
             Some(stage) => stage.finish(|c| {
@@ -90,8 +121,9 @@ impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
     }
 }
 
-/// Streams the log file at `path` as `model` needs it: read with `mapping`, cut into the
-/// chunks a fit cuts, with the rates of rotor acceleration and the slow rotor thrusts
+/// Streams the log file at `path` as `model` needs it: read with `mapping`, its regressor
+/// signals low-passed as the mapping's `[loads]` says, else as the model's fit logs were
+/// ([`IdentifiedModel::loads_low_pass_hz`]), cut into the chunks a fit cuts, with the rates of rotor acceleration and the slow rotor thrusts
 /// derived as the fit pipeline derives them (so `predict` and `validate` see the
 /// samples the fit saw), each chunk handed to `consume` in order.
 pub fn stream_for_model(
@@ -102,7 +134,13 @@ pub fn stream_for_model(
 ) -> Result<(), Error> {
     let read = ReadOptions::default();
     let derive = mapping.and_then(|m| m.derive).unwrap_or(read.derive);
-    let mut feed = Feed::new(derive, model.structure.needs_slow_thrust(), consume);
+    let low_pass = loads_low_pass(mapping).or(model.loads_low_pass_hz);
+    let mut feed = Feed::new(
+        derive,
+        low_pass,
+        model.structure.needs_slow_thrust(),
+        consume,
+    );
     let mut reader = io::open_log(path, &model.vehicle, mapping, &read)?;
     reader.join_segments();
     while let Some(chunk) = reader.next_chunk_mut() {
@@ -119,4 +157,10 @@ fn jerk_options(req: &FitRequest) -> DeriveOptions {
         .as_ref()
         .and_then(|m| m.derive)
         .unwrap_or(req.read.derive)
+}
+
+/// The cut-off (Hz) at which the loads were low-passed, from the mapping file's `[loads]`
+/// table ([`io::LoadsProcessing`]).
+fn loads_low_pass(mapping: Option<&Mapping>) -> Option<f64> {
+    mapping.and_then(|m| m.loads).map(|l| l.low_pass_hz)
 }

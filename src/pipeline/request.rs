@@ -81,6 +81,24 @@ pub struct FitRequest {
     /// (where `progress` is counted), the fit then ends with
     /// [`RequestError::Cancelled`].
     pub cancel: Option<Arc<AtomicBool>>,
+    /// The cut-off (Hz) at which the logs' loads were low-passed when they were made: the
+    /// regressor signals pass through the same kind of filter (consistent filtering,
+    /// [`crate::io::LoadsProcessing`]); `None`: as the mapping's `[loads]` says, else
+    /// not filtered.
+    pub loads_low_pass_hz: Option<f64>,
+}
+
+impl FitRequest {
+    /// The cut-off (Hz) the regressor signals are low-passed at: the request's, else the
+    /// mapping file's `[loads] low_pass_hz`.
+    pub fn effective_loads_low_pass(&self) -> Option<f64> {
+        self.loads_low_pass_hz.or_else(|| {
+            self.mapping
+                .as_ref()
+                .and_then(|m| m.loads)
+                .map(|l| l.low_pass_hz)
+        })
+    }
 }
 
 /// [`RequestError::Cancelled`] once `cancel` is set.
@@ -102,6 +120,11 @@ pub(super) fn check(req: &FitRequest) -> Result<(), RequestError> {
             blocks: h.blocks,
             guard_seconds: h.guard_seconds,
         });
+    }
+    if let Some(hz) = req.loads_low_pass_hz
+        && !(hz.is_finite() && hz > 0.0)
+    {
+        return Err(RequestError::InvalidLoadsLowPass { hz });
     }
     let (structure, vehicle) = (req.structure.rotor_count(), req.vehicle.rotor_count());
     if structure != vehicle {

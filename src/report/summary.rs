@@ -33,6 +33,10 @@ pub struct Report {
     pub vehicle: VehicleSummary,
     /// Eq. 22 variant.
     pub model: ModelOptions,
+    /// The cut-off (Hz) the regressor signals were low-passed at, as the loads had been
+    /// (consistent filtering); absent when they were not filtered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loads_low_pass_hz: Option<f64>,
     /// Degrees of freedom of the t-tests (N − n_θ, N = fit samples).
     pub degrees_of_freedom: f64,
     /// When set, why the parameters' `std`, `t` and `p` carry no information (the model
@@ -464,6 +468,7 @@ impl Report {
                 rotors: vehicle.rotor_count(),
             },
             model: structure.options,
+            loads_low_pass_hz: None,
             degrees_of_freedom: fit.mmr.dof,
             inference_withheld: fit.mmr.inference_withheld.clone(),
             parameters: fit

@@ -235,14 +235,17 @@ fn header(out: &mut String, r: &Report) {
     );
     let _ = writeln!(
         out,
-        "model: Eq. 22, inflow correction {:?}, terms linear in Vh {}, J_z terms {:?}\n",
+        "model: Eq. 22, inflow correction {:?}, terms linear in Vh {}, J_z terms {:?}{}\n",
         r.model.inflow,
         if r.model.linear_vh_terms {
             "kept"
         } else {
             "removed"
         },
-        r.model.rotor_inertia
+        r.model.rotor_inertia,
+        r.loads_low_pass_hz.map_or(String::new(), |hz| format!(
+            "; regressor signals low-passed at {hz} Hz as the loads were (consistent filtering)"
+        ))
     );
 }
 
