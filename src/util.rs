@@ -237,6 +237,18 @@ fn clear_upper_registers() {
 mod tests {
     use super::*;
 
+    /// A NaN or infinite statistic gives a P-value instead of statrs' panic (a NaN F
+    /// reached the FSOA on an independent-simulator response-surface set).
+    #[test]
+    fn survival_of_degenerate_statistics_is_defined() {
+        let f = statrs::distribution::FisherSnedecor::new(1.0, 100.0).unwrap();
+        assert_eq!(survival(&f, f64::NAN), 1.0);
+        assert_eq!(survival(&f, -1.0), 1.0);
+        assert_eq!(survival(&f, f64::INFINITY), 0.0);
+        // An ordinary value as statrs gives it: F(1, 100) at 3.936 is its 95 % point.
+        assert!((survival(&f, 3.936) - 0.05).abs() < 1e-3);
+    }
+
     /// The lane-wise range, in the AVX2 and the baseline code, equals the sequential fold
     /// bit for bit (a zero extremum +0 in both) on every length 0–40 and mixes of ±0, NaN, ±∞ and ordinary values.
     #[test]
@@ -347,5 +359,18 @@ mod tests {
             );
         }
         assert!(map_on_threads(&[] as &[u64], 4, f).is_empty());
+    }
+}
+
+/// P(X > `x`) of the distribution `d` for a statistic that may come out NaN or infinite
+/// from degenerate data: 1 (no evidence) for NaN or `x` ≤ 0, 0 for +∞. statrs' F and
+/// χ² survival functions panic on a NaN argument (the regularised beta's range check).
+pub(crate) fn survival(d: &impl statrs::distribution::ContinuousCDF<f64, f64>, x: f64) -> f64 {
+    if x.is_nan() || x <= 0.0 {
+        1.0
+    } else if x == f64::INFINITY {
+        0.0
+    } else {
+        d.sf(x)
     }
 }

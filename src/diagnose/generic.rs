@@ -377,7 +377,7 @@ fn screen_axis(
 /// P(F(1, dof) > f).
 fn f_survival(f: f64, dof: f64) -> f64 {
     use statrs::distribution::{ContinuousCDF, FisherSnedecor};
-    FisherSnedecor::new(1.0, dof).map_or(1.0, |d| d.sf(f))
+    FisherSnedecor::new(1.0, dof).map_or(1.0, |d| crate::util::survival(&d, f))
 }
 
 impl Screened {

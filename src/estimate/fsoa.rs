@@ -259,7 +259,7 @@ fn partial_f(sse_before: f64, sse_after: f64, dof: f64) -> (f64, f64) {
         };
     }
     let f = gain / (sse_after / dof);
-    let p = FisherSnedecor::new(1.0, dof).map_or(f64::NAN, |d| d.sf(f));
+    let p = FisherSnedecor::new(1.0, dof).map_or(f64::NAN, |d| crate::util::survival(&d, f));
     (f, p)
 }
 

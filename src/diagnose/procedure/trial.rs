@@ -128,7 +128,7 @@ pub(super) fn joint_p(t: &Trial, own: &[usize], inflation: f64) -> f64 {
     ) else {
         return 1.0;
     };
-    chi2.sf(w)
+    crate::util::survival(&chi2, w)
 }
 
 /// xᵀA⁻¹x for a symmetric positive definite k × k `a` (row-major), by Cholesky; `None`
