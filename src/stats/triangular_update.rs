@@ -122,8 +122,11 @@ fn factor_panel(
         let v = column(left, j);
         let alpha = r[(j, j)];
         let x_norm = norm(v);
-        if x_norm == 0.0 {
-            // Column j of [R; B] is already reduced: H = I.
+        if x_norm < f64::MIN_POSITIVE {
+            // Column j of [R; B] is already reduced: H = I. A subnormal remainder (the
+            // rounding residue of a rank-deficient factor, e.g. two merged accumulators
+            // of two samples each) counts as none: 1/(α − β) would overflow to ∞ and
+            // turn the rest of R into NaN.
             tau.push(0.0);
             continue;
         }
@@ -363,5 +366,23 @@ mod tests {
         // Column 2 is parallel to column 0: nothing left after its projection.
         assert!((r[(0, 2)] / 1e-200 - expected).abs() <= 1e-14 * expected);
         assert!(r[(2, 2)].abs() <= 1e-14 * 1e-200 * expected);
+    }
+
+    /// A column whose remainder below R is subnormal (8e-315, the residue met when the
+    /// time units of a sweep merged two-sample accumulators) is taken as reduced: R stays
+    /// finite (before, 1/(α − β) overflowed and R's later columns became NaN).
+    #[test]
+    fn a_subnormal_remainder_leaves_the_factor_finite() {
+        let mut r = Mat::from_fn(3, 3, |i, j| if i == 0 { 1.0 + j as f64 } else { 0.0 });
+        let mut b = Mat::from_fn(1, 3, |_, j| [0.0, 8e-315, 1.0][j]);
+        fold_rows(r.as_mut(), b.as_mut(), &mut FoldScratch::new());
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!(r[(i, j)].is_finite(), "R[{i},{j}] = {}", r[(i, j)]);
+            }
+        }
+        // Row 0 unchanged; the 1.0 in column 2 is folded in whole.
+        assert_eq!((r[(0, 0)], r[(0, 1)], r[(0, 2)]), (1.0, 2.0, 3.0));
+        assert!((r[(1, 2)].abs() + r[(2, 2)].abs() - 1.0).abs() < 1e-15);
     }
 }
