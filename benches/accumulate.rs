@@ -5,9 +5,9 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
+use mrsysid::internals::model::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::internals::sample::{Sample, SampleChunk};
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};

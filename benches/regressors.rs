@@ -4,8 +4,8 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Sample, SampleChunk};
+use mrsysid::internals::model::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::internals::sample::{Sample, SampleChunk};
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};

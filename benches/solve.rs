@@ -5,10 +5,10 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::estimate::{FitOptions, fit, fsoa};
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Axis, Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
+use mrsysid::internals::estimate::{FitOptions, fit, fsoa};
+use mrsysid::internals::model::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::internals::sample::{Axis, Sample, SampleChunk};
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};

@@ -14,13 +14,13 @@
 use std::path::Path;
 
 use mrsysid::Identification;
-use mrsysid::diagnose::{DiagnoseOptions, Diagnosis, diagnose_chunks};
-use mrsysid::estimate::FitOptions;
-use mrsysid::model::{ModelOptions, ModelStructure};
-use mrsysid::sample::SampleChunk;
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::test_matrix::{Design, Ranges, sweep};
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
+use mrsysid::internals::diagnose::{DiagnoseOptions, Diagnosis, diagnose_chunks};
+use mrsysid::internals::estimate::FitOptions;
+use mrsysid::internals::model::{ModelOptions, ModelStructure};
+use mrsysid::internals::sample::SampleChunk;
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::test_matrix::{Design, Ranges, sweep};
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::vehicle::Vehicle;
 
 /// What a case runs on.

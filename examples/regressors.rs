@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Axis, Sample, SampleChunk};
+use mrsysid::internals::model::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::internals::sample::{Axis, Sample, SampleChunk};
 use mrsysid::vehicle::Vehicle;
 
 fn main() -> ExitCode {

@@ -7,10 +7,10 @@
 //! sides are a few dozen floating-point products and sums, so agreement is expected to
 //! ~1e-15; any structural error (a wrong sign, a missing term) shows up at ≥ 1e-3.
 
-use mrsysid::airframe::closed_form_wrench;
-use mrsysid::model::{InflowCorrection, ModelOptions, ModelStructure, Workspace};
-use mrsysid::rotor::BladeConstants;
-use mrsysid::sample::{Axis, Sample, SampleChunk};
+use mrsysid::internals::airframe::closed_form_wrench;
+use mrsysid::internals::model::{InflowCorrection, ModelOptions, ModelStructure, Workspace};
+use mrsysid::internals::rotor::BladeConstants;
+use mrsysid::internals::sample::{Axis, Sample, SampleChunk};
 use mrsysid::vehicle::{
     ConfigurationClass, MassAndRotorProperties, Preset, Rotor, Vehicle, VehicleSource,
 };

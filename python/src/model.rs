@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
+use mrsysid::internals::model::Workspace;
+use mrsysid::internals::pipeline::stream_for_model;
 use mrsysid::io::Mapping;
-use mrsysid::model::Workspace;
-use mrsysid::pipeline::stream_for_model;
 use mrsysid::{IdentifiedModel, Sample, SampleChunk};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;

@@ -4,10 +4,10 @@
 
 #![allow(dead_code)] // each test binary uses a different subset of these helpers
 
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::rotor::BladeConstants;
-use mrsysid::sample::{Axis, Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
+use mrsysid::internals::model::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::internals::rotor::BladeConstants;
+use mrsysid::internals::sample::{Axis, Sample, SampleChunk};
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
