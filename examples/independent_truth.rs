@@ -138,8 +138,7 @@ fn report(case: &Case, seed: u64, d: &Diagnosis, s: &Score) {
     );
     println!("    added: {:?}", s.added);
     println!("    findings: {:?}", d.findings);
-    let rmse =
-        |m: &[mrsysid::internals::estimate::AxisMetrics; 6]| m.map(|a| format!("{:.3}", a.rmse));
+    let rmse = |m: &[mrsysid::AxisMetrics; 6]| m.map(|a| format!("{:.3}", a.rmse));
     println!(
         "    held-out RMSE Fx..Mz: Eq. 22 {:?}, final {:?}",
         rmse(&d.before),

@@ -6,13 +6,13 @@
 mod closed_form_common;
 
 use closed_form_common::{BLADE, vehicle};
+use mrsysid::Sample;
 use mrsysid::internals::airframe::closed_form_wrench;
 use mrsysid::internals::diagnose::{Candidate, CandidateContext, EffectKind, library};
-use mrsysid::internals::model::{ModelOptions, ModelStructure};
-use mrsysid::internals::sample::Sample;
 use mrsysid::internals::util::cross;
 use mrsysid::internals::util::quat_to_matrix;
 use mrsysid::vehicle::{Preset, Vehicle};
+use mrsysid::{ModelOptions, ModelStructure};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
@@ -304,8 +304,8 @@ fn steady_wind_columns_are_first_order_exact() {
 /// sample. Checked bit for bit on a chunk with every signal, over a scattered row subset.
 #[test]
 fn gathered_rows_equal_the_assembled_part() {
+    use mrsysid::Workspace;
     use mrsysid::internals::diagnose::{DiagnoseOptions, candidate_set};
-    use mrsysid::internals::model::Workspace;
     use mrsysid::internals::sample::{Axis, SampleChunk};
     let v = vehicle(Preset::QuadX);
     let base = ModelStructure::eq22(&v, ModelOptions::default());

@@ -12,11 +12,11 @@ use mrsysid::internals::diagnose::{
     candidate_set, diagnose,
 };
 use mrsysid::internals::estimate::{FitOptions, Folds, fit};
-use mrsysid::internals::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::internals::sample::{Sample, SampleChunk};
 use mrsysid::internals::stats::Accumulator;
 use mrsysid::internals::util::cross;
 use mrsysid::vehicle::{Preset, Vehicle};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::{Sample, SampleChunk};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};

@@ -6,13 +6,13 @@
 
 use std::path::Path;
 
+use mrsysid::SampleChunk;
 use mrsysid::internals::diagnose::{DiagnoseOptions, Diagnosis, EffectKind, diagnose_chunks};
 use mrsysid::internals::estimate::FitOptions;
-use mrsysid::internals::model::{ModelOptions, ModelStructure};
-use mrsysid::internals::sample::SampleChunk;
 use mrsysid::internals::sim::test_matrix::{Design, Ranges, sweep};
 use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::vehicle::Vehicle;
+use mrsysid::{ModelOptions, ModelStructure};
 
 fn vehicle() -> Vehicle {
     Vehicle::from_toml_file(

@@ -8,12 +8,12 @@
 //! ~1e-15; any structural error (a wrong sign, a missing term) shows up at ≥ 1e-3.
 
 use mrsysid::internals::airframe::closed_form_wrench;
-use mrsysid::internals::model::{InflowCorrection, ModelOptions, ModelStructure, Workspace};
 use mrsysid::internals::rotor::BladeConstants;
-use mrsysid::internals::sample::{Axis, Sample, SampleChunk};
 use mrsysid::vehicle::{
     ConfigurationClass, MassAndRotorProperties, Preset, Rotor, Vehicle, VehicleSource,
 };
+use mrsysid::{Axis, Sample, SampleChunk};
+use mrsysid::{InflowCorrection, ModelOptions, ModelStructure, Workspace};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

@@ -5,18 +5,14 @@
 mod estimate_common;
 
 use estimate_common::*;
+use mrsysid::SampleChunk;
+use mrsysid::Workspace;
 use mrsysid::internals::estimate::{DiagnosticOptions, FitOptions, ResidualPass, fit};
-use mrsysid::internals::model::Workspace;
-use mrsysid::internals::sample::SampleChunk;
 
 /// Data with per-axis AR(1) noise e_t = φ e_{t−1} + √(1−φ²) L w_t (stationary
 /// covariance L Lᵀ); φ = 0 is white. The regressors are smooth in time (a random walk of
 /// the flight state), as in flight data, so coloured residuals matter.
-fn data(
-    seed: u64,
-    n: usize,
-    phi: f64,
-) -> (mrsysid::internals::model::ModelStructure, Vec<SampleChunk>) {
+fn data(seed: u64, n: usize, phi: f64) -> (mrsysid::ModelStructure, Vec<SampleChunk>) {
     use rand::RngExt;
     let v = quad_x();
     let s = structure(&v);
@@ -48,7 +44,7 @@ fn data(
 }
 
 fn pass(
-    s: &mrsysid::internals::model::ModelStructure,
+    s: &mrsysid::ModelStructure,
     f: &mrsysid::internals::estimate::Fit,
     chunks: &[SampleChunk],
     o: DiagnosticOptions,
@@ -125,8 +121,8 @@ fn merged_segments_equal_one_pass() {
     }
 }
 
-fn sample_at(c: &SampleChunk, i: usize) -> mrsysid::internals::sample::Sample {
-    mrsysid::internals::sample::Sample {
+fn sample_at(c: &SampleChunk, i: usize) -> mrsysid::Sample {
+    mrsysid::Sample {
         t: c.t[i],
         velocity: std::array::from_fn(|k| c.velocity[k][i]),
         rates: std::array::from_fn(|k| c.rates[k][i]),

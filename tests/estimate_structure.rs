@@ -8,21 +8,14 @@
 mod estimate_common;
 
 use estimate_common::*;
+use mrsysid::Workspace;
 use mrsysid::internals::estimate::{EstimateError, FitOptions, UnidentifiablePolicy, fit};
-use mrsysid::internals::model::Workspace;
-use mrsysid::internals::sample::{Axis, Sample};
 use mrsysid::internals::stats::Accumulator;
+use mrsysid::{Axis, Sample};
 use nalgebra::{DMatrix, DVector};
 
 /// Noisy quad× data of `n` samples with the fixed cross-axis noise.
-fn noisy(
-    seed: u64,
-    n: usize,
-) -> (
-    mrsysid::internals::model::ModelStructure,
-    Vec<f64>,
-    Vec<Sample>,
-) {
+fn noisy(seed: u64, n: usize) -> (mrsysid::ModelStructure, Vec<f64>, Vec<Sample>) {
     let v = quad_x();
     let s = structure(&v);
     let theta = true_theta(&s, &v);
@@ -436,10 +429,7 @@ fn assert_dropped_by_construction(
 
 /// The problem and parameters named when fitting with the `Refuse` policy fails (panics
 /// when it does not).
-fn refusal(
-    structure: &mrsysid::internals::model::ModelStructure,
-    acc: &Accumulator,
-) -> (String, Vec<String>) {
+fn refusal(structure: &mrsysid::ModelStructure, acc: &Accumulator) -> (String, Vec<String>) {
     let refuse = FitOptions {
         unidentifiable: UnidentifiablePolicy::Refuse,
         ..FitOptions::default()
@@ -522,7 +512,7 @@ fn selected_columns_equal_accumulating_the_smaller_structure() {
             unit: "-".into(),
         },
         vec![Column {
-            axis: mrsysid::internals::sample::Axis::Fx,
+            axis: mrsysid::Axis::Fx,
             param: 0,
             label: "u|u|".into(),
             terms: vec![term(1.0, &[Signal::U, Signal::AbsU])],

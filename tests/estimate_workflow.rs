@@ -5,9 +5,10 @@
 mod estimate_common;
 
 use estimate_common::*;
+use mrsysid::Axis;
+use mrsysid::Workspace;
 use mrsysid::internals::estimate::{FitOptions, evaluate, fit, score_addition};
-use mrsysid::internals::model::{Column, Parameter, Signal, Workspace, term};
-use mrsysid::internals::sample::Axis;
+use mrsysid::internals::model::{Column, Parameter, Signal, term};
 use mrsysid::internals::stats::{AccumulateError, Accumulator};
 
 /// θ fitted on one data set, evaluated on an independent one through its accumulator:

@@ -10,7 +10,7 @@ mod scratch;
 use std::path::{Path, PathBuf};
 
 use io_support::quad;
-use mrsysid::internals::sample::SampleChunk;
+use mrsysid::SampleChunk;
 use mrsysid::io::{InvalidSamples, ReadOptions, open_log};
 
 /// A block of rows (10–12 kB: a data row of [`row`] is 50–60 bytes) for placing bad rows

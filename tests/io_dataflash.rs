@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use io_support::{analytic_chunk, concat, quad};
-use mrsysid::internals::sample::SampleChunk;
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::dataflash::{DataflashWriter, RcouCurve, Value, write_flight};
 use mrsysid::io::{IoError, Mapping, ReadOptions, Summary, open_log, read_parameters};
 

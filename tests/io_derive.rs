@@ -8,7 +8,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use io_support::quad;
-use mrsysid::internals::sample::SampleChunk;
+use mrsysid::SampleChunk;
 use mrsysid::io::{Mapping, ReadOptions, open_log};
 
 fn tmp(name: &str) -> PathBuf {

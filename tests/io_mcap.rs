@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use io_support::{analytic_chunk, assert_same, concat, quad};
-use mrsysid::internals::sample::SampleChunk;
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::mcap::{
     Encoding, Layout, write_samples, write_samples_laid_out, written_mapping,
 };

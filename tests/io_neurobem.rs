@@ -7,7 +7,7 @@ mod scratch;
 
 use std::path::Path;
 
-use mrsysid::internals::sample::SampleChunk;
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{Mapping, ReadOptions, open_log};
 use mrsysid::vehicle::Vehicle;

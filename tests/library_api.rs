@@ -7,15 +7,15 @@
 mod scratch;
 use std::path::{Path, PathBuf};
 
+use mrsysid::Holdout;
+use mrsysid::IdentifiedModel;
 use mrsysid::error::RequestError;
 use mrsysid::internals::estimate::{self, FitOptions};
-use mrsysid::internals::identified::IdentifiedModel;
-use mrsysid::internals::model::{ModelError, ModelOptions, ModelStructure, Workspace};
-use mrsysid::internals::pipeline::Holdout;
 use mrsysid::internals::stats::{AccumulateError, Accumulator};
 use mrsysid::io::{Location, Mapping, ReadOptions};
 use mrsysid::vehicle::VehicleSource;
 use mrsysid::{Error, Identification, MemoryLog, Sample, SampleChunk, Vehicle};
+use mrsysid::{ModelError, ModelOptions, ModelStructure, Workspace};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

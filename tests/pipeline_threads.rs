@@ -7,10 +7,11 @@ use std::path::{Path, PathBuf};
 
 use mrsysid::internals::diagnose::DiagnoseOptions;
 use mrsysid::internals::estimate::FitOptions;
-use mrsysid::internals::model::{ModelOptions, ModelStructure};
-use mrsysid::internals::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries};
+use mrsysid::internals::pipeline::{self, FitRequest};
 use mrsysid::io::ReadOptions;
 use mrsysid::vehicle::Vehicle;
+use mrsysid::{FitOutcome, Holdout, PlotSeries};
+use mrsysid::{ModelOptions, ModelStructure};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

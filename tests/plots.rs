@@ -1,7 +1,7 @@
 //! Plots render without system fonts and are written whole (SVG + PNG, no partial files).
 
 mod scratch;
-use mrsysid::internals::sample::Axis;
+use mrsysid::Axis;
 use mrsysid::report::plots::{
     AxisSeries, NormalProbability, ResidualDensity, normal_probability, residual_densities,
     time_histories,

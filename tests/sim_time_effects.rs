@@ -8,7 +8,7 @@ use std::path::Path;
 
 use nalgebra::{Quaternion, UnitQuaternion};
 
-use mrsysid::internals::sample::SampleChunk;
+use mrsysid::SampleChunk;
 use mrsysid::internals::sim::blade_element::RotorKinematics;
 use mrsysid::internals::sim::controller::Gains;
 use mrsysid::internals::sim::disturbance::TrimMoment;

@@ -7,8 +7,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
-use mrsysid::internals::model::ModelOptions;
-use mrsysid::internals::pipeline::Holdout;
+use mrsysid::Holdout;
+use mrsysid::ModelOptions;
 use mrsysid::io::{InvalidSamples, Mapping, ReadOptions};
 use mrsysid::{Identification, MemoryLog};
 use pyo3::exceptions::PyRuntimeError;

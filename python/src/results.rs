@@ -1,7 +1,7 @@
 //! `Results`: what a fit produced, as plain Python values (the package's pandas layer
 //! makes DataFrames of them).
 
-use mrsysid::internals::estimate::AxisMetrics;
+use mrsysid::AxisMetrics;
 use numpy::PyArray2;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;

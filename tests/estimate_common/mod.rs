@@ -4,11 +4,11 @@
 
 #![allow(dead_code)] // each test binary uses a different subset of these helpers
 
-use mrsysid::internals::model::{ModelOptions, ModelStructure, Workspace};
 use mrsysid::internals::rotor::BladeConstants;
-use mrsysid::internals::sample::{Axis, Sample, SampleChunk};
 use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::{Axis, Sample, SampleChunk};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
