@@ -5,10 +5,10 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::{Sample, SampleChunk};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

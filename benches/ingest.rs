@@ -14,10 +14,10 @@ use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::mcap::{Encoding, write_samples, written_mapping};
 use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{ReadOptions, open_log};
-use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 
 const CSV_ROWS: usize = 1_000_000;

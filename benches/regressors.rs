@@ -4,9 +4,9 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Sample, SampleChunk};
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::{Sample, SampleChunk};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

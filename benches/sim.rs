@@ -7,11 +7,11 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use mrsysid::sim::blade_element::RotorKinematics;
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::inflow::{InflowModel, InflowState};
-use mrsysid::sim::test_matrix::{Design, Ranges, sweep};
-use mrsysid::sim::{Effects, RotorFile, TruthInput, TruthModel};
+use mrsysid::internals::sim::blade_element::RotorKinematics;
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::inflow::{InflowModel, InflowState};
+use mrsysid::internals::sim::test_matrix::{Design, Ranges, sweep};
+use mrsysid::internals::sim::{Effects, RotorFile, TruthInput, TruthModel};
 use mrsysid::vehicle::Vehicle;
 
 fn model() -> TruthModel {

@@ -5,11 +5,11 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::estimate::{FitOptions, fit, fsoa};
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Axis, Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
+use mrsysid::internals::estimate::{FitOptions, fit, fsoa};
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::{Axis, Sample, SampleChunk};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

@@ -4,11 +4,11 @@
 //! `cargo run --release --example accumulate_rate`.
 
 use mrsysid::CHUNK_SAMPLES;
-use mrsysid::estimate::{DiagnosticOptions, FitOptions, ResidualPass, fit};
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
+use mrsysid::internals::estimate::{DiagnosticOptions, FitOptions, ResidualPass, fit};
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::{Sample, SampleChunk};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

@@ -14,14 +14,14 @@
 use std::path::Path;
 
 use mrsysid::Identification;
-use mrsysid::diagnose::{DiagnoseOptions, Diagnosis, diagnose_chunks};
-use mrsysid::estimate::FitOptions;
-use mrsysid::model::{ModelOptions, ModelStructure};
-use mrsysid::sample::SampleChunk;
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::test_matrix::{Design, Ranges, sweep};
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
+use mrsysid::SampleChunk;
+use mrsysid::internals::diagnose::{DiagnoseOptions, Diagnosis, diagnose_chunks};
+use mrsysid::internals::estimate::FitOptions;
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::test_matrix::{Design, Ranges, sweep};
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::vehicle::Vehicle;
+use mrsysid::{ModelOptions, ModelStructure};
 
 /// What a case runs on.
 #[derive(Clone, Copy)]

@@ -20,7 +20,7 @@ use independent::score::{
     Case, DataKind, Naming, Score, cases, data, diagnose, effect_size, expected_kind, score,
     vehicle,
 };
-use mrsysid::diagnose::Diagnosis;
+use mrsysid::internals::diagnose::Diagnosis;
 
 /// First seed; seed k of a run is `FIRST_SEED + k`.
 const FIRST_SEED: u64 = 42_000;
@@ -138,7 +138,7 @@ fn report(case: &Case, seed: u64, d: &Diagnosis, s: &Score) {
     );
     println!("    added: {:?}", s.added);
     println!("    findings: {:?}", d.findings);
-    let rmse = |m: &[mrsysid::estimate::AxisMetrics; 6]| m.map(|a| format!("{:.3}", a.rmse));
+    let rmse = |m: &[mrsysid::AxisMetrics; 6]| m.map(|a| format!("{:.3}", a.rmse));
     println!(
         "    held-out RMSE Fx..Mz: Eq. 22 {:?}, final {:?}",
         rmse(&d.before),

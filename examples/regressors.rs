@@ -6,9 +6,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Axis, Sample, SampleChunk};
 use mrsysid::vehicle::Vehicle;
+use mrsysid::{Axis, Sample, SampleChunk};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
 
 fn main() -> ExitCode {
     let path = std::env::args_os()

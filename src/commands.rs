@@ -7,20 +7,15 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-use mrsysid::Identification;
-use mrsysid::estimate::{self, ResidualDiagnostics};
-use mrsysid::identified::IdentifiedModel;
-use mrsysid::inputs::same_file;
-use mrsysid::io::{self, InvalidSamples, Mapping, ReadOptions};
-use mrsysid::model::{ModelOptions, Workspace};
-use mrsysid::pipeline::{FitOutcome, Holdout, PlotSeries, stream_for_model};
+use crate::FitArgs;
+use mrsysid::io;
 use mrsysid::report::plots::{self, AxisSeries, NormalProbability, ResidualDensity};
 use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
-use mrsysid::sample::Axis;
-use mrsysid::stats::Accumulator;
-use mrsysid::util::write_atomically;
-use mrsysid::vehicle::Vehicle;
+use mrsysid::{
+    Axis, FitOutcome, Identification, IdentifiedModel, Mapping, PlotSeries, ResidualDiagnostics,
+    Validation, Vehicle, same_file, write_atomically,
+};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// A failed command: message and process exit code (1 fit failed, 2 bad input).
@@ -126,42 +121,13 @@ const PLOT_STEMS: [&str; 4] = [
     "normal_probability",
 ];
 
-/// Everything `fit` and `diagnose` take from the command line.
-pub struct FitCommand {
-    pub logs: Vec<PathBuf>,
-    pub vehicle: PathBuf,
-    pub mapping: Option<PathBuf>,
-    pub options: ModelOptions,
-    pub drop_invalid: bool,
-    pub validate: Vec<PathBuf>,
-    pub holdout: Holdout,
-    pub loads_low_pass: Option<f64>,
-    pub json: Option<PathBuf>,
-    pub model_out: Option<PathBuf>,
-    pub plots: Option<PathBuf>,
-    pub threads: Option<usize>,
-    pub quiet: bool,
-    pub diagnose: bool,
-}
-
-fn read_options(drop_invalid: bool) -> ReadOptions {
-    ReadOptions {
-        invalid: if drop_invalid {
-            InvalidSamples::DropAndCount
-        } else {
-            InvalidSamples::Error
-        },
-        ..ReadOptions::default()
-    }
-}
-
 fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
     Ok(path.map(Mapping::from_toml_file).transpose()?)
 }
 
 /// The outputs of `fit` (for [`check_outputs`]): the JSON report, the model file, the
 /// plot directory and the plot files in it.
-fn fit_outputs(cmd: &FitCommand) -> Vec<(&'static str, PathBuf)> {
+fn fit_outputs(cmd: &FitArgs) -> Vec<(&'static str, PathBuf)> {
     let mut out = Vec::new();
     out.extend(cmd.json.iter().map(|p| ("--json", p.clone())));
     out.extend(cmd.model_out.iter().map(|p| ("--model-out", p.clone())));
@@ -177,18 +143,23 @@ fn fit_outputs(cmd: &FitCommand) -> Vec<(&'static str, PathBuf)> {
 }
 
 /// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
-pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
+pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
     let outputs = fit_outputs(cmd);
     let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
-    let mut inputs: Vec<(&str, &Path)> = vec![("vehicle file", cmd.vehicle.as_path())];
-    inputs.extend(cmd.mapping.iter().map(|p| ("mapping file", p.as_path())));
+    let mut inputs: Vec<(&str, &Path)> = vec![("vehicle file", cmd.model.vehicle.as_path())];
+    inputs.extend(
+        cmd.model
+            .mapping
+            .iter()
+            .map(|p| ("mapping file", p.as_path())),
+    );
     inputs.extend(cmd.logs.iter().map(|p| ("fit log", p.as_path())));
     inputs.extend(cmd.validate.iter().map(|p| ("validation log", p.as_path())));
     check_outputs(&outputs, &inputs)?;
-    let vehicle = Vehicle::from_toml_file(&cmd.vehicle)?;
+    let vehicle = Vehicle::from_toml_file(&cmd.model.vehicle)?;
     if !cmd.quiet {
         for note in vehicle.notes() {
-            print_err(&format!("note: {}: {note}", cmd.vehicle.display()));
+            print_err(&format!("note: {}: {note}", cmd.model.vehicle.display()));
         }
     }
     if let Some(dir) = &cmd.plots {
@@ -199,24 +170,7 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
             ))
         })?;
     }
-    let mut job = Identification::new(vehicle)
-        .model_options(cmd.options)
-        .logs(cmd.logs.iter().cloned())
-        .read_options(read_options(cmd.drop_invalid))
-        .holdout(cmd.holdout)
-        .diagnose(cmd.diagnose);
-    for log in &cmd.validate {
-        job = job.validate(log.clone());
-    }
-    if let Some(mapping) = load_mapping(cmd.mapping.as_deref())? {
-        job = job.mapping(mapping);
-    }
-    if let Some(threads) = cmd.threads {
-        job = job.threads(threads);
-    }
-    if let Some(hz) = cmd.loads_low_pass {
-        job = job.loads_low_pass(hz);
-    }
+    let job = cmd.identification(vehicle, load_mapping(cmd.model.mapping.as_deref())?);
     let results = with_progress(job, cmd.quiet, |job| job.run())?;
     let report = results.report();
     if !cmd.quiet {
@@ -457,17 +411,14 @@ pub fn predict(
     let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
     let mut text = String::from("t,fx,fy,fz,mx,my,mz\n");
-    let mut ws = Workspace::default();
-    stream_for_model(&m, log, mapping.as_ref(), |chunk| {
-        let y = m.predict_chunk(chunk, &mut ws)?;
+    m.predict_log(log, mapping.as_ref(), |chunk, y| {
         for k in 0..chunk.len() {
             text.push_str(&format!("{}", chunk.t[k]));
-            for col in &y {
+            for col in y {
                 text.push_str(&format!(",{}", col[k]));
             }
             text.push('\n');
         }
-        Ok(())
     })
     .map_err(|e| naming_the_log(log, e))?;
     write_atomically(out, text.as_bytes())
@@ -488,26 +439,20 @@ pub fn validate(
     check_outputs(&outputs, &inputs)?;
     let m = IdentifiedModel::load(model)?;
     let mapping = load_mapping(mapping)?;
-    let mut acc = Accumulator::new(&m.structure);
-    let mut ws = Workspace::default();
+    let mut validation = Validation::new(&m);
     for log in logs {
-        stream_for_model(&m, log, mapping.as_ref(), |chunk| {
-            acc.push(&m.structure, chunk, &mut ws)
-                .map_err(|e| mrsysid::Error::Accumulate {
-                    log: log.display().to_string(),
-                    source: e,
-                })
-        })
-        .map_err(|e| naming_the_log(log, e))?;
+        validation
+            .add_log(log, mapping.as_ref())
+            .map_err(|e| naming_the_log(log, e))?;
     }
-    if acc.count() == 0 {
+    if validation.samples() == 0 {
         return Err(Failure::fit("no samples in the validation logs".into()));
     }
-    let metrics = estimate::evaluate(&m.structure, &m.theta(), &acc)?;
+    let metrics = validation.metrics()?;
     let rows: Vec<AxisRow> = metrics.iter().map(AxisRow::from).collect();
     let mut text = format!(
         "{} samples; model {}\n  {:<4} {:>10} {:>8} {:>8} {:>12}\n",
-        acc.count(),
+        validation.samples(),
         model.display(),
         "axis",
         "NRMSE [%]",
@@ -528,7 +473,7 @@ pub fn validate(
     print_out(&text)?;
     if let Some(path) = json {
         let text = serde_json::to_string_pretty(
-            &serde_json::json!({ "samples": acc.count(), "axes": rows }),
+            &serde_json::json!({ "samples": validation.samples(), "axes": rows }),
         )
         .map_err(|e| Failure::fit(e.to_string()))?;
         write_atomically(path, text.as_bytes())

@@ -27,33 +27,25 @@
 //! # }
 //! ```
 //!
-//! # Modules
+//! # The front
 //!
-//! After the seed's sections:
-//! - [`vehicle`]: geometry, mass properties, Assumption 2 checks, Definition 1 (§2, §4.2);
-//! - [`rotor`]: single-rotor closed form and lumped parameters (§3, Eq. 2–8);
-//! - [`airframe`]: per-rotor loads carried to the airframe and summed (§4.1, Eq. 10–18);
-//! - [`mixing`]: virtual actuators (Eq. 19–21);
-//! - [`model`]: the Eq. 22 regressors as data, batch assembly, prediction;
-//! - [`sample`]: the data contract, as structure-of-arrays chunks;
-//! - [`stats`]: one-pass mergeable statistics of the regressors and outputs;
-//! - [`estimate`]: the two-step estimation of §5 (OLS, FSOA, MMR, inference,
-//!   diagnostics, identifiability, cross-validation);
-//! - [`diagnose`]: closing the loop: candidate effects the model lacks, tested on
-//!   held-out data.
-//!
-//! The product around them:
-//! - [`identify`]: the fit builder [`Identification`] and its [`Results`];
-//! - [`pipeline`]: the streaming fit over logs (both passes, threads, hold-out);
-//! - [`source`]: where samples come from (files, or [`source::MemoryLog`]);
-//! - [`inputs`]: checks of a request's files (a log given twice, an output that is an
-//!   input);
-//! - [`io`]: log readers (CSV contract and mapped CSV, MCAP, PX4 ULog) and writers;
-//! - [`identified`]: the saved model file, prediction with an identified model;
+//! What a user needs is at the crate root: the fit builder [`Identification`] with
+//! its options ([`ModelOptions`], [`Holdout`], [`ReadOptions`], [`Mapping`]), its
+//! [`Results`] and [`FitOutcome`], the saved model [`IdentifiedModel`] (prediction,
+//! [`Validation`] on other logs), the [`Vehicle`], the data contract ([`Sample`],
+//! [`SampleChunk`], [`MemoryLog`]) and the [`Error`]. Beside them:
+//! - [`io`]: log readers (CSV contract and mapped CSV, MCAP, PX4 ULog, ArduPilot
+//!   DataFlash) and the vehicle skeletons read off an autopilot's parameters;
+//! - [`vehicle`]: geometry, mass properties, Assumption 2 checks, Definition 1 (§2,
+//!   §4.2);
 //! - [`report`]: the report (tables, JSON) and, with the `plots` feature, plots;
-//! - [`error`]: the library's [`Error`];
-//! - [`util`]: vector algebra, quaternion rotation, atomic file writes;
-//! - [`sim`]: the truth simulator (blade-element rotors, effects, sweeps, flights).
+//! - [`simulate`]: the truth simulator's front (sweeps and flights to a contract CSV);
+//! - [`error`]: the library's [`Error`] and the request's errors.
+//!
+//! [`internals`] opens the modules below for the crate's benchmarks, examples, tests
+//! and Python package: the seed's sections (rotor, airframe, Eq. 22 model, statistics,
+//! estimation, diagnosis), the streaming pipeline and the simulator. It is no stable
+//! interface.
 //!
 //! # Features
 //!
@@ -63,35 +55,110 @@
 
 #![warn(missing_docs)]
 
-pub mod airframe;
+mod airframe;
 mod consistent_filter;
-pub mod diagnose;
+mod diagnose;
 pub mod error;
-pub mod estimate;
+mod estimate;
 mod held;
-pub mod identified;
-pub mod identify;
-pub mod inputs;
+mod identified;
+mod identify;
+mod inputs;
 pub mod io;
-pub mod mixing;
-pub mod model;
-pub mod pipeline;
+mod mixing;
+mod model;
+mod on_logs;
+mod pipeline;
 pub mod report;
-pub mod rotor;
-pub mod sample;
-pub mod sim;
+mod rotor;
+mod sample;
+mod sim;
 mod slow;
 mod smooth;
-pub mod source;
+mod source;
 mod spill;
-pub mod stats;
-pub mod util;
+mod stats;
+mod util;
 pub mod vehicle;
 
-pub use error::Error;
-pub use identified::IdentifiedModel;
-pub use identify::{Identification, Results};
+pub use error::{Error, RequestError};
+pub use estimate::{AxisMetrics, ResidualDiagnostics};
+pub use identified::{IdentifiedModel, ModelFileError};
+pub use identify::{Identification, InformationCriteria, ParameterResult, Results};
+pub use inputs::same_file;
+pub use io::{InvalidSamples, IoError, Mapping, ReadOptions};
+pub use model::{
+    InflowCorrection, ModelError, ModelOptions, ModelStructure, RotorInertiaTerms, Workspace,
+};
+pub use on_logs::Validation;
+pub use pipeline::{FitOutcome, Holdout, PlotSeries};
+pub use report::summary::Report;
 pub use sample::{Axis, CHUNK_SAMPLES, Sample, SampleChunk};
 pub use slow::TRIM_BANDS_HZ;
 pub use source::{LogSource, MemoryLog};
-pub use vehicle::Vehicle;
+pub use util::write_atomically;
+pub use vehicle::{Vehicle, VehicleSource};
+
+/// The truth simulator's front, as `mrsysid simulate` uses it: a response-surface sweep
+/// or a flight (controller, sensors, undeclared effects) written as a contract CSV.
+pub mod simulate {
+    pub use crate::sim::Effect;
+    pub use crate::sim::flight::FlightConfig;
+    pub use crate::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate_to_file};
+    pub use crate::sim::test_matrix::Design;
+}
+
+/// The crate's inner modules, opened for its benchmarks, examples, tests and Python
+/// package, which exercise the seed's steps one by one. Not a stable interface: a user
+/// of the library needs only the crate root and its public modules.
+pub mod internals {
+    /// Per-rotor loads carried to the airframe and summed (§4.1, Eq. 10–18).
+    pub mod airframe {
+        pub use crate::airframe::*;
+    }
+    /// Closing the loop: candidate effects the model lacks, tested on held-out data.
+    pub mod diagnose {
+        pub use crate::diagnose::*;
+    }
+    /// The two-step estimation of §5 (OLS, FSOA, MMR, inference, diagnostics,
+    /// identifiability, cross-validation).
+    pub mod estimate {
+        pub use crate::estimate::*;
+    }
+    /// The saved model file, prediction with an identified model.
+    pub mod identified {
+        pub use crate::identified::*;
+    }
+    /// Virtual actuators (Eq. 19–21).
+    pub mod mixing {
+        pub use crate::mixing::*;
+    }
+    /// The Eq. 22 regressors as data, batch assembly, prediction.
+    pub mod model {
+        pub use crate::model::*;
+    }
+    /// The streaming fit over logs (both passes, threads, hold-out).
+    pub mod pipeline {
+        pub use crate::pipeline::*;
+    }
+    /// Single-rotor closed form and lumped parameters (§3, Eq. 2–8).
+    pub mod rotor {
+        pub use crate::rotor::*;
+    }
+    /// The data contract, as structure-of-arrays chunks.
+    pub mod sample {
+        pub use crate::sample::*;
+    }
+    /// The truth simulator (blade-element rotors, effects, sweeps, flights).
+    pub mod sim {
+        pub use crate::sim::*;
+    }
+    /// One-pass mergeable statistics of the regressors and outputs.
+    pub mod stats {
+        pub use crate::stats::*;
+    }
+    /// Vector algebra, quaternion rotation, atomic file writes.
+    pub mod util {
+        pub use crate::util::*;
+    }
+}

@@ -6,12 +6,13 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use mrsysid::model::{InflowCorrection, ModelOptions, RotorInertiaTerms};
-use mrsysid::pipeline::Holdout;
-use mrsysid::sim::Effect;
-use mrsysid::sim::flight::FlightConfig;
-use mrsysid::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate_to_file};
-use mrsysid::sim::test_matrix::Design;
+use mrsysid::simulate::{
+    Design, Effect, FlightConfig, Mode, SimulateOptions, VehicleChoice, simulate_to_file,
+};
+use mrsysid::{
+    Holdout, Identification, InflowCorrection, InvalidSamples, Mapping, ModelOptions, ReadOptions,
+    RotorInertiaTerms, Vehicle,
+};
 
 /// Offline nonlinear system identification of multirotor aircraft.
 #[derive(Parser)]
@@ -276,8 +277,8 @@ impl SimulateArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Fit(args) => commands::fit(&args.request(), false),
-        Command::Diagnose(args) => commands::fit(&args.request(), true),
+        Command::Fit(args) => commands::fit(&args, false),
+        Command::Diagnose(args) => commands::fit(&args, true),
         Command::Predict(args) => {
             commands::predict(&args.model, &args.log, args.mapping.as_deref(), &args.out)
         }
@@ -328,30 +329,42 @@ fn validate_help() -> String {
 }
 
 impl FitArgs {
-    fn request(&self) -> commands::FitCommand {
+    /// The fit request, the library's builder set straight from the arguments (the
+    /// vehicle and mapping loaded from `--vehicle` and `--mapping`).
+    fn identification(&self, vehicle: Vehicle, mapping: Option<Mapping>) -> Identification {
         let m = &self.model;
-        commands::FitCommand {
-            logs: self.logs.clone(),
-            vehicle: m.vehicle.clone(),
-            mapping: m.mapping.clone(),
-            options: ModelOptions {
+        let mut job = Identification::new(vehicle)
+            .model_options(ModelOptions {
                 inflow: m.inflow,
                 linear_vh_terms: !m.no_linear_vh,
                 rotor_inertia: m.rotor_inertia,
-            },
-            drop_invalid: m.drop_invalid,
-            validate: self.validate.clone(),
-            holdout: Holdout {
+            })
+            .logs(self.logs.iter().cloned())
+            .read_options(ReadOptions {
+                invalid: if m.drop_invalid {
+                    InvalidSamples::DropAndCount
+                } else {
+                    InvalidSamples::Error
+                },
+                ..ReadOptions::default()
+            })
+            .holdout(Holdout {
                 blocks: self.holdout_blocks,
                 guard_seconds: self.holdout_guard,
-            },
-            loads_low_pass: self.loads_low_pass,
-            json: self.json.clone(),
-            model_out: self.model_out.clone(),
-            plots: self.plots.clone(),
-            threads: self.threads,
-            quiet: self.quiet,
-            diagnose: !self.no_diagnose,
+            })
+            .diagnose(!self.no_diagnose);
+        for log in &self.validate {
+            job = job.validate(log.clone());
         }
+        if let Some(mapping) = mapping {
+            job = job.mapping(mapping);
+        }
+        if let Some(threads) = self.threads {
+            job = job.threads(threads);
+        }
+        if let Some(hz) = self.loads_low_pass {
+            job = job.loads_low_pass(hz);
+        }
+        job
     }
 }

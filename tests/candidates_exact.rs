@@ -6,13 +6,13 @@
 mod closed_form_common;
 
 use closed_form_common::{BLADE, vehicle};
-use mrsysid::airframe::closed_form_wrench;
-use mrsysid::diagnose::{Candidate, CandidateContext, EffectKind, library};
-use mrsysid::model::{ModelOptions, ModelStructure};
-use mrsysid::sample::Sample;
-use mrsysid::util::cross;
-use mrsysid::util::quat_to_matrix;
+use mrsysid::Sample;
+use mrsysid::internals::airframe::closed_form_wrench;
+use mrsysid::internals::diagnose::{Candidate, CandidateContext, EffectKind, library};
+use mrsysid::internals::util::cross;
+use mrsysid::internals::util::quat_to_matrix;
 use mrsysid::vehicle::{Preset, Vehicle};
+use mrsysid::{ModelOptions, ModelStructure};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 
@@ -176,7 +176,7 @@ fn ground_effect_columns_are_exact() {
     let v = vehicle(Preset::QuadX);
     let (r, h) = (v.props.rotor_radius, v.props.hub_height);
     let e = check(&v, EffectKind::GroundEffect, &[1.0], |s, b| {
-        let g = mrsysid::model::ground_effect_factor(r, s.height.unwrap() + h);
+        let g = mrsysid::internals::model::ground_effect_factor(r, s.height.unwrap() + h);
         let d: Vec<f64> = rotor_thrusts(&v, s).iter().map(|t| g * t).collect();
         with_thrust_change(&v, b, &d)
     });
@@ -203,7 +203,7 @@ fn per_rotor_ground_effect_columns_are_exact() {
                         let hub = [rotor.x, rotor.y, -h];
                         let down: f64 = (0..3).map(|k| body_to_ned[2][k] * hub[k]).sum();
                         let z = s.height.unwrap() - down;
-                        mrsysid::model::ground_effect_factor(r, z) * t
+                        mrsysid::internals::model::ground_effect_factor(r, z) * t
                     })
                     .collect();
                 with_thrust_change(&v, b, &d)
@@ -304,9 +304,9 @@ fn steady_wind_columns_are_first_order_exact() {
 /// sample. Checked bit for bit on a chunk with every signal, over a scattered row subset.
 #[test]
 fn gathered_rows_equal_the_assembled_part() {
-    use mrsysid::diagnose::{DiagnoseOptions, candidate_set};
-    use mrsysid::model::Workspace;
-    use mrsysid::sample::{Axis, SampleChunk};
+    use mrsysid::Workspace;
+    use mrsysid::internals::diagnose::{DiagnoseOptions, candidate_set};
+    use mrsysid::internals::sample::{Axis, SampleChunk};
     let v = vehicle(Preset::QuadX);
     let base = ModelStructure::eq22(&v, ModelOptions::default());
     let theta = vec![1e-6; base.params.len()];

@@ -10,9 +10,9 @@ mod scratch;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::io::fixtures::dataflash::{DataflashWriter, write_flight};
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::vehicle::{Vehicle, VehicleSource};
 
 fn tmp(name: &str) -> PathBuf {

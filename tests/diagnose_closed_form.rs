@@ -6,17 +6,17 @@
 mod closed_form_common;
 
 use closed_form_common::{BLADE, vehicle};
-use mrsysid::airframe::closed_form_wrench;
-use mrsysid::diagnose::{
+use mrsysid::internals::airframe::closed_form_wrench;
+use mrsysid::internals::diagnose::{
     CandidateContext, CandidateStatistics, DiagnoseOptions, SCREENING_SAMPLES, Thinned,
     candidate_set, diagnose,
 };
-use mrsysid::estimate::{FitOptions, Folds, fit};
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::{Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
-use mrsysid::util::cross;
+use mrsysid::internals::estimate::{FitOptions, Folds, fit};
+use mrsysid::internals::stats::Accumulator;
+use mrsysid::internals::util::cross;
 use mrsysid::vehicle::{Preset, Vehicle};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
+use mrsysid::{Sample, SampleChunk};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Normal};
@@ -67,7 +67,7 @@ fn data(
     chunks
 }
 
-fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::diagnose::Diagnosis {
+fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::internals::diagnose::Diagnosis {
     let v = vehicle(Preset::QuadX);
     let base = ModelStructure::eq22(&v, ModelOptions::default());
     let (fit_data, val_data) = (data(&v, 1, 6000, truth), data(&v, 2, 2000, truth));
@@ -191,7 +191,9 @@ fn unnamed_structure_is_found_by_the_generic_pool() {
 }
 
 /// The first effect added that is not a completion of Eq. 22's own assumptions.
-fn first_effect(d: &mrsysid::diagnose::Diagnosis) -> &mrsysid::diagnose::CandidateScore {
+fn first_effect(
+    d: &mrsysid::internals::diagnose::Diagnosis,
+) -> &mrsysid::internals::diagnose::CandidateScore {
     d.effects_added
         .iter()
         .find(|e| !e.role.is_model_completion())

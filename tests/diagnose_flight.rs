@@ -4,9 +4,9 @@
 
 use std::path::Path;
 
-use mrsysid::diagnose::{Diagnosis, EffectKind};
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
+use mrsysid::internals::diagnose::{Diagnosis, EffectKind};
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::{Identification, MemoryLog, Vehicle};
 
 fn vehicle() -> Vehicle {
@@ -46,7 +46,7 @@ fn diagnose_flight(effects: &[&str], duration: f64, near_ground: f64, seed: u64)
 }
 
 /// The ground effect the diagnosis added, which must be the per-rotor-height form.
-fn per_rotor_ground_effect(d: &Diagnosis) -> &mrsysid::diagnose::CandidateScore {
+fn per_rotor_ground_effect(d: &Diagnosis) -> &mrsysid::internals::diagnose::CandidateScore {
     let e = d
         .effects_added
         .iter()
@@ -96,7 +96,7 @@ fn ground_effect_in_a_partly_low_flight_is_found_in_its_per_rotor_form() {
 /// A 60 s flight at usual altitudes (nothing flown low on purpose) where the per-rotor
 /// ground effect acts on only a handful of held-out samples (5 % measured), all in one of
 /// the five contiguous cross-validation blocks. Their output range is small, so a fold
-/// with under [`mrsysid::diagnose::local::MIN_ACTIVE_SAMPLES`] of them gives no NRMSE
+/// with under [`mrsysid::internals::diagnose::local::MIN_ACTIVE_SAMPLES`] of them gives no NRMSE
 /// (before that minimum the gain came out non-finite and the form, P ≈ 1e-147, was
 /// rejected "−inf % below 5 %"); the folds where it does act judge it, the others are
 /// left out of its local gain.
@@ -137,7 +137,7 @@ fn a_completion_that_takes_an_effects_evidence_names_it_as_a_look_alike() {
         })
         .expect("the lever arm added");
     let added = &step.ranking[step.added.unwrap()];
-    let flapping = |s: &mrsysid::diagnose::DiagnosisStep| {
+    let flapping = |s: &mrsysid::internals::diagnose::DiagnosisStep| {
         s.ranking
             .iter()
             .find(|c| c.name == "rotor flapping moment")

@@ -6,13 +6,13 @@
 
 use std::path::Path;
 
-use mrsysid::diagnose::{DiagnoseOptions, Diagnosis, EffectKind, diagnose_chunks};
-use mrsysid::estimate::FitOptions;
-use mrsysid::model::{ModelOptions, ModelStructure};
-use mrsysid::sample::SampleChunk;
-use mrsysid::sim::test_matrix::{Design, Ranges, sweep};
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
+use mrsysid::SampleChunk;
+use mrsysid::internals::diagnose::{DiagnoseOptions, Diagnosis, EffectKind, diagnose_chunks};
+use mrsysid::internals::estimate::FitOptions;
+use mrsysid::internals::sim::test_matrix::{Design, Ranges, sweep};
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::vehicle::Vehicle;
+use mrsysid::{ModelOptions, ModelStructure};
 
 fn vehicle() -> Vehicle {
     Vehicle::from_toml_file(
@@ -58,14 +58,14 @@ fn run_with(effects: &[&str], seed: u64, options: &DiagnoseOptions) -> Diagnosis
 }
 
 /// The first undeclared effect (not a model completion) added.
-fn first_effect(d: &Diagnosis) -> &mrsysid::diagnose::CandidateScore {
+fn first_effect(d: &Diagnosis) -> &mrsysid::internals::diagnose::CandidateScore {
     d.effects_added
         .iter()
         .find(|e| !e.role.is_model_completion())
         .unwrap_or_else(|| panic!("no effect added: {:#?}", d.steps.last().map(|s| &s.ranking)))
 }
 
-fn estimate(e: &mrsysid::diagnose::CandidateScore, name: &str) -> f64 {
+fn estimate(e: &mrsysid::internals::diagnose::CandidateScore, name: &str) -> f64 {
     e.parameters
         .iter()
         .find(|p| p.name == name)

@@ -7,13 +7,13 @@
 //! sides are a few dozen floating-point products and sums, so agreement is expected to
 //! ~1e-15; any structural error (a wrong sign, a missing term) shows up at ≥ 1e-3.
 
-use mrsysid::airframe::closed_form_wrench;
-use mrsysid::model::{InflowCorrection, ModelOptions, ModelStructure, Workspace};
-use mrsysid::rotor::BladeConstants;
-use mrsysid::sample::{Axis, Sample, SampleChunk};
+use mrsysid::internals::airframe::closed_form_wrench;
+use mrsysid::internals::rotor::BladeConstants;
 use mrsysid::vehicle::{
     ConfigurationClass, MassAndRotorProperties, Preset, Rotor, Vehicle, VehicleSource,
 };
+use mrsysid::{Axis, Sample, SampleChunk};
+use mrsysid::{InflowCorrection, ModelOptions, ModelStructure, Workspace};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

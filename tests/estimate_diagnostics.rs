@@ -5,14 +5,14 @@
 mod estimate_common;
 
 use estimate_common::*;
-use mrsysid::estimate::{DiagnosticOptions, FitOptions, ResidualPass, fit};
-use mrsysid::model::Workspace;
-use mrsysid::sample::SampleChunk;
+use mrsysid::SampleChunk;
+use mrsysid::Workspace;
+use mrsysid::internals::estimate::{DiagnosticOptions, FitOptions, ResidualPass, fit};
 
 /// Data with per-axis AR(1) noise e_t = φ e_{t−1} + √(1−φ²) L w_t (stationary
 /// covariance L Lᵀ); φ = 0 is white. The regressors are smooth in time (a random walk of
 /// the flight state), as in flight data, so coloured residuals matter.
-fn data(seed: u64, n: usize, phi: f64) -> (mrsysid::model::ModelStructure, Vec<SampleChunk>) {
+fn data(seed: u64, n: usize, phi: f64) -> (mrsysid::ModelStructure, Vec<SampleChunk>) {
     use rand::RngExt;
     let v = quad_x();
     let s = structure(&v);
@@ -44,8 +44,8 @@ fn data(seed: u64, n: usize, phi: f64) -> (mrsysid::model::ModelStructure, Vec<S
 }
 
 fn pass(
-    s: &mrsysid::model::ModelStructure,
-    f: &mrsysid::estimate::Fit,
+    s: &mrsysid::ModelStructure,
+    f: &mrsysid::internals::estimate::Fit,
     chunks: &[SampleChunk],
     o: DiagnosticOptions,
 ) -> ResidualPass {
@@ -121,8 +121,8 @@ fn merged_segments_equal_one_pass() {
     }
 }
 
-fn sample_at(c: &SampleChunk, i: usize) -> mrsysid::sample::Sample {
-    mrsysid::sample::Sample {
+fn sample_at(c: &SampleChunk, i: usize) -> mrsysid::Sample {
+    mrsysid::Sample {
         t: c.t[i],
         velocity: std::array::from_fn(|k| c.velocity[k][i]),
         rates: std::array::from_fn(|k| c.rates[k][i]),

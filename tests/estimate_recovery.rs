@@ -5,7 +5,7 @@
 mod estimate_common;
 
 use estimate_common::*;
-use mrsysid::estimate::{EstimateError, FitOptions, evaluate, fit};
+use mrsysid::internals::estimate::{EstimateError, FitOptions, evaluate, fit};
 
 /// Noise-free Eq. 22 data: every estimate (per-axis OLS and MMR) equals θ to 1e-9
 /// relative. The data are exact up to rounding (~1e-16 relative) and the equilibrated

@@ -8,14 +8,14 @@
 mod estimate_common;
 
 use estimate_common::*;
-use mrsysid::estimate::{EstimateError, FitOptions, UnidentifiablePolicy, fit};
-use mrsysid::model::Workspace;
-use mrsysid::sample::{Axis, Sample};
-use mrsysid::stats::Accumulator;
+use mrsysid::Workspace;
+use mrsysid::internals::estimate::{EstimateError, FitOptions, UnidentifiablePolicy, fit};
+use mrsysid::internals::stats::Accumulator;
+use mrsysid::{Axis, Sample};
 use nalgebra::{DMatrix, DVector};
 
 /// Noisy quad× data of `n` samples with the fixed cross-axis noise.
-fn noisy(seed: u64, n: usize) -> (mrsysid::model::ModelStructure, Vec<f64>, Vec<Sample>) {
+fn noisy(seed: u64, n: usize) -> (mrsysid::ModelStructure, Vec<f64>, Vec<Sample>) {
     let v = quad_x();
     let s = structure(&v);
     let theta = true_theta(&s, &v);
@@ -412,9 +412,9 @@ fn scaled_error(theta: &[f64], reference: &[f64], scales: &[f64]) -> f64 {
 /// the M_x OLS of `with` (the structure holding it) fits as `without` does: the same
 /// SSE to 1e-12 (the same columns, factored from the same rows).
 fn assert_dropped_by_construction(
-    d: &mrsysid::estimate::DroppedTerm,
-    without: &mrsysid::estimate::Fit,
-    with: &mrsysid::estimate::Fit,
+    d: &mrsysid::internals::estimate::DroppedTerm,
+    without: &mrsysid::internals::estimate::Fit,
+    with: &mrsysid::internals::estimate::Fit,
 ) {
     assert_eq!(
         (d.cause.as_deref(), d.condition_number),
@@ -429,7 +429,7 @@ fn assert_dropped_by_construction(
 
 /// The problem and parameters named when fitting with the `Refuse` policy fails (panics
 /// when it does not).
-fn refusal(structure: &mrsysid::model::ModelStructure, acc: &Accumulator) -> (String, Vec<String>) {
+fn refusal(structure: &mrsysid::ModelStructure, acc: &Accumulator) -> (String, Vec<String>) {
     let refuse = FitOptions {
         unidentifiable: UnidentifiablePolicy::Refuse,
         ..FitOptions::default()
@@ -502,7 +502,7 @@ fn selected_columns_equal_accumulating_the_smaller_structure() {
     // Accumulate a structure with an extra parameter, select the base columns, and
     // compare every cross product with accumulating the base structure directly: both
     // are QR factors of the same data, equal up to rounding (1e-12 relative).
-    use mrsysid::model::{Column, Parameter, Signal, term};
+    use mrsysid::internals::model::{Column, Parameter, Signal, term};
     let (base, _, samples) = noisy(5, 3000);
     let chunks = chunks(&samples, 4, 1024);
     let mut big = base.clone();
@@ -512,7 +512,7 @@ fn selected_columns_equal_accumulating_the_smaller_structure() {
             unit: "-".into(),
         },
         vec![Column {
-            axis: mrsysid::sample::Axis::Fx,
+            axis: mrsysid::Axis::Fx,
             param: 0,
             label: "u|u|".into(),
             terms: vec![term(1.0, &[Signal::U, Signal::AbsU])],
@@ -563,7 +563,7 @@ fn a_column_of_the_same_shape_on_one_axis_is_dropped_as_aliased() {
     let shared = base.params[base.columns[mx].param].name.clone();
     let mut untied = base.clone();
     untied.add_parameter(
-        mrsysid::model::Parameter {
+        mrsysid::internals::model::Parameter {
             name: format!("{shared}@Mx"),
             unit: base.params[base.columns[mx].param].unit.clone(),
         },
@@ -609,13 +609,13 @@ fn a_column_spanned_by_the_terms_of_others_on_one_axis_is_dropped_as_aliased() {
         terms.push(t);
     }
     let mut offset = base.clone();
-    let column = mrsysid::model::Column {
+    let column = mrsysid::internals::model::Column {
         axis: Axis::Mx,
         param: 0,
         label: "offset".into(),
         terms,
     };
-    let param = mrsysid::model::Parameter {
+    let param = mrsysid::internals::model::Parameter {
         name: "dz".into(),
         unit: "m".into(),
     };

@@ -5,10 +5,11 @@
 mod estimate_common;
 
 use estimate_common::*;
-use mrsysid::estimate::{FitOptions, evaluate, fit, score_addition};
-use mrsysid::model::{Column, Parameter, Signal, Workspace, term};
-use mrsysid::sample::Axis;
-use mrsysid::stats::{AccumulateError, Accumulator};
+use mrsysid::Axis;
+use mrsysid::Workspace;
+use mrsysid::internals::estimate::{FitOptions, evaluate, fit, score_addition};
+use mrsysid::internals::model::{Column, Parameter, Signal, term};
+use mrsysid::internals::stats::{AccumulateError, Accumulator};
 
 /// θ fitted on one data set, evaluated on an independent one through its accumulator:
 /// the validation RMSE equals the noise sd per axis within 5 % (N = 5000: sampling sd of
@@ -142,6 +143,6 @@ fn fit_serialises_to_json() {
 const _: fn() = || {
     fn send<T: Send>() {}
     send::<Accumulator>();
-    send::<mrsysid::estimate::ResidualPass>();
-    send::<mrsysid::estimate::Fit>();
+    send::<mrsysid::internals::estimate::ResidualPass>();
+    send::<mrsysid::internals::estimate::Fit>();
 };

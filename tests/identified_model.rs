@@ -2,11 +2,11 @@
 //! refused with the file named.
 
 mod scratch;
-use mrsysid::identified::IdentifiedModel;
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::rotor::BladeConstants;
-use mrsysid::sample::{Axis, Sample, SampleChunk};
+use mrsysid::IdentifiedModel;
+use mrsysid::internals::rotor::BladeConstants;
 use mrsysid::vehicle::Vehicle;
+use mrsysid::{Axis, Sample, SampleChunk};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
 
 fn quad() -> Vehicle {
     Vehicle::from_toml_file(
@@ -186,8 +186,8 @@ fn bad_model_files_name_the_file_and_problem() {
 
 #[test]
 fn added_effect_columns_survive_the_model_file() {
-    use mrsysid::model::{Column, Parameter, Signal, term};
-    use mrsysid::sample::Axis;
+    use mrsysid::Axis;
+    use mrsysid::internals::model::{Column, Parameter, Signal, term};
     let m = model();
     let mut s = m.structure.clone();
     s.add_parameter(

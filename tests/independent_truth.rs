@@ -12,7 +12,7 @@ use independent::score::{
     Case, DataKind, Naming, Score, data, diagnose, effect_size, expected_kind, score, vehicle,
 };
 use independent::surface::FORCE_NOISE;
-use mrsysid::diagnose::Diagnosis;
+use mrsysid::internals::diagnose::Diagnosis;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// The seed of the harness's first row.

@@ -10,8 +10,8 @@ mod scratch;
 use std::path::{Path, PathBuf};
 
 use io_support::quad;
+use mrsysid::SampleChunk;
 use mrsysid::io::{InvalidSamples, ReadOptions, open_log};
-use mrsysid::sample::SampleChunk;
 
 /// A block of rows (10–12 kB: a data row of [`row`] is 50–60 bytes) for placing bad rows
 /// many ranges apart.

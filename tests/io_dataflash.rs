@@ -11,9 +11,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use io_support::{analytic_chunk, concat, quad};
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::dataflash::{DataflashWriter, RcouCurve, Value, write_flight};
 use mrsysid::io::{IoError, Mapping, ReadOptions, Summary, open_log, read_parameters};
-use mrsysid::sample::SampleChunk;
 
 fn tmp(name: &str) -> PathBuf {
     scratch::dir("dataflash").join(name)

@@ -8,8 +8,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use io_support::quad;
+use mrsysid::SampleChunk;
 use mrsysid::io::{Mapping, ReadOptions, open_log};
-use mrsysid::sample::SampleChunk;
 
 fn tmp(name: &str) -> PathBuf {
     scratch::dir("derive").join(name)

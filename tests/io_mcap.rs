@@ -8,12 +8,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use io_support::{analytic_chunk, assert_same, concat, quad};
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::mcap::{
     Encoding, Layout, write_samples, write_samples_laid_out, written_mapping,
 };
 use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{Mapping, ReadOptions, open_log};
-use mrsysid::sample::SampleChunk;
 
 fn tmp(name: &str) -> PathBuf {
     scratch::dir("mcap").join(name)

@@ -7,9 +7,9 @@ mod scratch;
 
 use std::path::Path;
 
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::write_contract_csv;
 use mrsysid::io::{Mapping, ReadOptions, open_log};
-use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::Vehicle;
 
 const FILES: [&str; 3] = [

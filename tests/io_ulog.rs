@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 use io_support::{
     Px4Log, analytic_chunk, concat, px4_gyro, px4_like_log, px4_pwm, px4_rpm, px4_velocity, quad,
 };
+use mrsysid::SampleChunk;
 use mrsysid::io::fixtures::ulog::{UlogWriter, write_samples, written_mapping};
 use mrsysid::io::{IoError, Mapping, ReadOptions, Summary, open_log, read_definitions};
-use mrsysid::sample::SampleChunk;
 use mrsysid::vehicle::Vehicle;
 
 fn tmp(name: &str) -> PathBuf {

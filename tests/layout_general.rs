@@ -5,16 +5,16 @@
 mod scratch;
 use std::path::Path;
 
-use mrsysid::estimate::{FitOptions, evaluate, fit};
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::sample::SampleChunk;
-use mrsysid::sim::blade_element::BladeOverrides;
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::inflow::{InflowModel, fit_plane};
-use mrsysid::sim::test_matrix::{Design, REFERENCE_ARM, Ranges, sweep};
-use mrsysid::sim::{Effects, RotorFile, TruthModel};
-use mrsysid::stats::Accumulator;
+use mrsysid::SampleChunk;
+use mrsysid::internals::estimate::{FitOptions, evaluate, fit};
+use mrsysid::internals::sim::blade_element::BladeOverrides;
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::inflow::{InflowModel, fit_plane};
+use mrsysid::internals::sim::test_matrix::{Design, REFERENCE_ARM, Ranges, sweep};
+use mrsysid::internals::sim::{Effects, RotorFile, TruthModel};
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{ConfigurationClass, Vehicle, VehicleSource};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
 
 fn asymmetric_x() -> Vehicle {
     Vehicle::from_toml_file(Path::new("data/vehicles/quad_x_asym.toml")).unwrap()

@@ -7,15 +7,15 @@
 mod scratch;
 use std::path::{Path, PathBuf};
 
+use mrsysid::Holdout;
+use mrsysid::IdentifiedModel;
 use mrsysid::error::RequestError;
-use mrsysid::estimate::{self, FitOptions};
-use mrsysid::identified::IdentifiedModel;
+use mrsysid::internals::estimate::{self, FitOptions};
+use mrsysid::internals::stats::{AccumulateError, Accumulator};
 use mrsysid::io::{Location, Mapping, ReadOptions};
-use mrsysid::model::{ModelError, ModelOptions, ModelStructure, Workspace};
-use mrsysid::pipeline::Holdout;
-use mrsysid::stats::{AccumulateError, Accumulator};
 use mrsysid::vehicle::VehicleSource;
 use mrsysid::{Error, Identification, MemoryLog, Sample, SampleChunk, Vehicle};
+use mrsysid::{ModelError, ModelOptions, ModelStructure, Workspace};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -5,12 +5,13 @@
 mod scratch;
 use std::path::{Path, PathBuf};
 
-use mrsysid::diagnose::DiagnoseOptions;
-use mrsysid::estimate::FitOptions;
+use mrsysid::internals::diagnose::DiagnoseOptions;
+use mrsysid::internals::estimate::FitOptions;
+use mrsysid::internals::pipeline::{self, FitRequest};
 use mrsysid::io::ReadOptions;
-use mrsysid::model::{ModelOptions, ModelStructure};
-use mrsysid::pipeline::{self, FitOutcome, FitRequest, Holdout, PlotSeries};
 use mrsysid::vehicle::Vehicle;
+use mrsysid::{FitOutcome, Holdout, PlotSeries};
+use mrsysid::{ModelOptions, ModelStructure};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -115,7 +116,7 @@ fn one_two_and_four_threads_give_the_same_report() {
 
 /// The log at `path` read by the library's reader into a memory log of the file's name
 /// (the cross-validation folds and the diagnosis name the logs).
-fn in_memory(path: &Path, vehicle: &Vehicle) -> mrsysid::source::MemoryLog {
+fn in_memory(path: &Path, vehicle: &Vehicle) -> mrsysid::MemoryLog {
     let reader =
         mrsysid::io::open_log(path, vehicle, None, &ReadOptions::default()).expect("open log");
     let chunks: Vec<_> = reader.map(|c| c.expect("chunk")).collect();
@@ -123,7 +124,7 @@ fn in_memory(path: &Path, vehicle: &Vehicle) -> mrsysid::source::MemoryLog {
         .file_name()
         .and_then(|n| n.to_str())
         .expect("file name");
-    mrsysid::source::MemoryLog::from_chunks(name, chunks).expect("memory log")
+    mrsysid::MemoryLog::from_chunks(name, chunks).expect("memory log")
 }
 
 #[test]
@@ -204,7 +205,7 @@ fn a_log_of_several_second_pass_segments_gives_one_report() {
 fn json_report(name: &str, threads: usize, range_bytes: usize) -> String {
     let vehicle =
         Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle");
-    let results = mrsysid::identify::Identification::new(vehicle)
+    let results = mrsysid::Identification::new(vehicle)
         .log(root().join("data").join(name))
         .read_options(ReadOptions {
             range_bytes,

@@ -1,11 +1,11 @@
 //! Plots render without system fonts and are written whole (SVG + PNG, no partial files).
 
 mod scratch;
+use mrsysid::Axis;
 use mrsysid::report::plots::{
     AxisSeries, NormalProbability, ResidualDensity, normal_probability, residual_densities,
     time_histories,
 };
-use mrsysid::sample::Axis;
 
 fn out_dir(name: &str) -> std::path::PathBuf {
     scratch::dir(&format!("plots-{name}"))

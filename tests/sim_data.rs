@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use mrsysid::sim::flight::FlightConfig;
-use mrsysid::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate};
-use mrsysid::sim::test_matrix::Design;
+use mrsysid::internals::sim::flight::FlightConfig;
+use mrsysid::internals::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate};
+use mrsysid::internals::sim::test_matrix::Design;
 
 fn regenerate(opts: SimulateOptions, shipped: &str) {
     let bytes = simulate(&opts).unwrap().to_csv_bytes();

@@ -5,12 +5,12 @@
 
 use std::path::Path;
 
-use mrsysid::sim::blade_element::{HubLoads, RotorKinematics};
-use mrsysid::sim::effects::{ground_effect_ratio, vortex_ring_factor};
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::inflow::InflowState;
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthInput, TruthModel};
-use mrsysid::util::cross;
+use mrsysid::internals::sim::blade_element::{HubLoads, RotorKinematics};
+use mrsysid::internals::sim::effects::{ground_effect_ratio, vortex_ring_factor};
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::inflow::InflowState;
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthInput, TruthModel};
+use mrsysid::internals::util::cross;
 use mrsysid::vehicle::Vehicle;
 
 fn vehicle() -> Vehicle {

@@ -4,10 +4,10 @@
 
 use std::path::Path;
 
-use mrsysid::sim::flight::{FlightConfig, fly};
-use mrsysid::sim::sensors::SensorConfig;
-use mrsysid::sim::test_matrix::REFERENCE_ARM;
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
+use mrsysid::internals::sim::flight::{FlightConfig, fly};
+use mrsysid::internals::sim::sensors::SensorConfig;
+use mrsysid::internals::sim::test_matrix::REFERENCE_ARM;
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::vehicle::Vehicle;
 
 fn model(name: &str, effects: &[&str]) -> TruthModel {

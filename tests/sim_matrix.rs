@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use mrsysid::sim::test_matrix::{Design, Ranges, latin_hypercube, sweep};
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthModel};
+use mrsysid::internals::sim::test_matrix::{Design, Ranges, latin_hypercube, sweep};
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthModel};
 use mrsysid::vehicle::Vehicle;
 use rand::SeedableRng;
 use rand::rngs::StdRng;

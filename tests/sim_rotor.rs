@@ -4,12 +4,12 @@
 
 use std::path::Path;
 
-use mrsysid::airframe::closed_form_wrench;
-use mrsysid::rotor::BladeConstants;
-use mrsysid::sim::blade_element::{BladeOverrides, RotorKinematics};
-use mrsysid::sim::inflow::{InflowModel, InflowState, fit_plane};
-use mrsysid::sim::test_matrix::{Design, Ranges, sweep};
-use mrsysid::sim::{Effects, RotorFile, TruthInput, TruthModel};
+use mrsysid::internals::airframe::closed_form_wrench;
+use mrsysid::internals::rotor::BladeConstants;
+use mrsysid::internals::sim::blade_element::{BladeOverrides, RotorKinematics};
+use mrsysid::internals::sim::inflow::{InflowModel, InflowState, fit_plane};
+use mrsysid::internals::sim::test_matrix::{Design, Ranges, sweep};
+use mrsysid::internals::sim::{Effects, RotorFile, TruthInput, TruthModel};
 use mrsysid::vehicle::Vehicle;
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};

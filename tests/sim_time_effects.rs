@@ -8,15 +8,15 @@ use std::path::Path;
 
 use nalgebra::{Quaternion, UnitQuaternion};
 
-use mrsysid::sample::SampleChunk;
-use mrsysid::sim::blade_element::RotorKinematics;
-use mrsysid::sim::controller::Gains;
-use mrsysid::sim::disturbance::TrimMoment;
-use mrsysid::sim::filter::smooth;
-use mrsysid::sim::flight::{FlightConfig, FlightLog, fly};
-use mrsysid::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate};
-use mrsysid::sim::sensors::{SensorConfig, lag_step};
-use mrsysid::sim::{Effect, Effects, RotorFile, TruthInput, TruthModel};
+use mrsysid::SampleChunk;
+use mrsysid::internals::sim::blade_element::RotorKinematics;
+use mrsysid::internals::sim::controller::Gains;
+use mrsysid::internals::sim::disturbance::TrimMoment;
+use mrsysid::internals::sim::filter::smooth;
+use mrsysid::internals::sim::flight::{FlightConfig, FlightLog, fly};
+use mrsysid::internals::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate};
+use mrsysid::internals::sim::sensors::{SensorConfig, lag_step};
+use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthInput, TruthModel};
 use mrsysid::vehicle::Vehicle;
 
 fn model(effects: &[&str]) -> TruthModel {
@@ -407,7 +407,7 @@ fn time_effects_are_refused_in_sweeps() {
             vehicle: VehicleChoice::Example("quad_x".into()),
             rotor_file: None,
             mode: Mode::Sweep {
-                design: mrsysid::sim::test_matrix::Design::LatinHypercube,
+                design: mrsysid::internals::sim::test_matrix::Design::LatinHypercube,
                 points: 5,
             },
             effects: vec![e.parse().unwrap()],

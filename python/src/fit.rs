@@ -7,9 +7,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
+use mrsysid::Holdout;
+use mrsysid::ModelOptions;
 use mrsysid::io::{InvalidSamples, Mapping, ReadOptions};
-use mrsysid::model::ModelOptions;
-use mrsysid::pipeline::Holdout;
 use mrsysid::{Identification, MemoryLog};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;

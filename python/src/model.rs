@@ -3,9 +3,8 @@
 
 use std::path::PathBuf;
 
+use mrsysid::Workspace;
 use mrsysid::io::Mapping;
-use mrsysid::model::Workspace;
-use mrsysid::pipeline::stream_for_model;
 use mrsysid::{IdentifiedModel, Sample, SampleChunk};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -183,15 +182,14 @@ impl Model {
             .transpose()
             .map_err(|e| to_py(py, &e.into()))?;
         let y = py.detach(|| {
-            let mut ws = Workspace::default();
             let mut t = Vec::new();
             let mut out: [Vec<f64>; 6] = Default::default();
-            stream_for_model(&self.inner, &path, mapping.as_ref(), |c| {
-                t.extend_from_slice(&c.t);
-                extend(&mut out, &self.inner.predict_chunk(c, &mut ws)?);
-                Ok(())
-            })
-            .map(|()| (t, out))
+            self.inner
+                .predict_log(&path, mapping.as_ref(), |c, y| {
+                    t.extend_from_slice(&c.t);
+                    extend(&mut out, y);
+                })
+                .map(|()| (t, out))
         });
         let (t, out) = y.map_err(|e| to_py(py, &e))?;
         outputs(py, Some(t), out)

@@ -1,7 +1,7 @@
 //! `Results`: what a fit produced, as plain Python values (the package's pandas layer
 //! makes DataFrames of them).
 
-use mrsysid::estimate::AxisMetrics;
+use mrsysid::AxisMetrics;
 use numpy::PyArray2;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -49,9 +49,8 @@ impl Results {
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let p = self.inner.parameters();
         let out = PyDict::new(py);
-        let column = |f: fn(&mrsysid::identify::ParameterResult) -> f64| -> Vec<f64> {
-            p.iter().map(f).collect()
-        };
+        let column =
+            |f: fn(&mrsysid::ParameterResult) -> f64| -> Vec<f64> { p.iter().map(f).collect() };
         out.set_item("name", p.iter().map(|r| r.name.clone()).collect::<Vec<_>>())?;
         out.set_item("estimate", column(|r| r.estimate))?;
         out.set_item("std", column(|r| r.std))?;

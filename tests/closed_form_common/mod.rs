@@ -1,7 +1,7 @@
 //! Shared fixtures of the closed-form-world tests: a 1.2 kg 5-inch vehicle and blade
 //! constants that lift it at about 2000 rad/s.
 
-use mrsysid::rotor::BladeConstants;
+use mrsysid::internals::rotor::BladeConstants;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 
 /// Blade and inflow constants of the test rotor.

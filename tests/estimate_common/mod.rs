@@ -4,11 +4,11 @@
 
 #![allow(dead_code)] // each test binary uses a different subset of these helpers
 
-use mrsysid::model::{ModelOptions, ModelStructure, Workspace};
-use mrsysid::rotor::BladeConstants;
-use mrsysid::sample::{Axis, Sample, SampleChunk};
-use mrsysid::stats::Accumulator;
+use mrsysid::internals::rotor::BladeConstants;
+use mrsysid::internals::stats::Accumulator;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::{Axis, Sample, SampleChunk};
+use mrsysid::{ModelOptions, ModelStructure, Workspace};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
 

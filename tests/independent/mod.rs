@@ -1,6 +1,6 @@
 //! A second, independent source of truth for the diagnosis: a simple multirotor model
 //! written for the tests (its own rotor formula, airframe, controller and sensors; the
-//! crate's truth simulator `mrsysid::sim` is not used), five hidden effects in forms of
+//! crate's truth simulator `mrsysid::internals::sim` is not used), five hidden effects in forms of
 //! its own, and a harness that scores the product's diagnosis on them.
 //!
 //! - [`physics`]: the rotor and airframe loads;

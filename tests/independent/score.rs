@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use mrsysid::diagnose::{CandidateScore, Diagnosis, EffectKind};
+use mrsysid::internals::diagnose::{CandidateScore, Diagnosis, EffectKind};
 use mrsysid::{Identification, Sample, Vehicle};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 

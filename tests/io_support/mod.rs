@@ -1,7 +1,7 @@
 //! Shared helpers of the io tests: a test vehicle and analytic sample streams.
 #![allow(dead_code)]
 
-use mrsysid::sample::SampleChunk;
+use mrsysid::SampleChunk;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 
 /// A quad-x test vehicle with J_z = 0 (no rotor-acceleration derivation).
