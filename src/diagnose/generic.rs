@@ -376,7 +376,7 @@ fn screen_axis(
 
 /// P(F(1, dof) > f).
 fn f_survival(f: f64, dof: f64) -> f64 {
-    use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+    use statrs::distribution::FisherSnedecor;
     FisherSnedecor::new(1.0, dof).map_or(1.0, |d| crate::util::survival(&d, f))
 }
 

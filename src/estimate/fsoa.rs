@@ -13,7 +13,7 @@
 //! (Morelli & Klein 2016, stepwise regression), which mark where terms stop paying.
 
 use serde::Serialize;
-use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+use statrs::distribution::FisherSnedecor;
 
 use super::EstimateError;
 use super::lstsq::{self, SingularValues};
