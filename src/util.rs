@@ -233,6 +233,19 @@ fn clear_upper_registers() {
     std::arch::x86_64::_mm256_zeroupper();
 }
 
+/// P(X > `x`) of the distribution `d` for a statistic that may come out NaN or infinite
+/// from degenerate data: 1 (no evidence) for NaN or `x` ≤ 0, 0 for +∞. statrs' F and
+/// χ² survival functions panic on a NaN argument (the regularised beta's range check).
+pub(crate) fn survival(d: &impl statrs::distribution::ContinuousCDF<f64, f64>, x: f64) -> f64 {
+    if x.is_nan() || x <= 0.0 {
+        1.0
+    } else if x == f64::INFINITY {
+        0.0
+    } else {
+        d.sf(x)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -359,18 +372,5 @@ mod tests {
             );
         }
         assert!(map_on_threads(&[] as &[u64], 4, f).is_empty());
-    }
-}
-
-/// P(X > `x`) of the distribution `d` for a statistic that may come out NaN or infinite
-/// from degenerate data: 1 (no evidence) for NaN or `x` ≤ 0, 0 for +∞. statrs' F and
-/// χ² survival functions panic on a NaN argument (the regularised beta's range check).
-pub(crate) fn survival(d: &impl statrs::distribution::ContinuousCDF<f64, f64>, x: f64) -> f64 {
-    if x.is_nan() || x <= 0.0 {
-        1.0
-    } else if x == f64::INFINITY {
-        0.0
-    } else {
-        d.sf(x)
     }
 }
