@@ -133,6 +133,7 @@ pub struct FitCommand {
     pub mapping: Option<PathBuf>,
     pub options: ModelOptions,
     pub drop_invalid: bool,
+    pub keep_ground: bool,
     pub validate: Vec<PathBuf>,
     pub holdout: Holdout,
     pub loads_low_pass: Option<f64>,
@@ -144,8 +145,9 @@ pub struct FitCommand {
     pub diagnose: bool,
 }
 
-fn read_options(drop_invalid: bool) -> ReadOptions {
+fn read_options(drop_invalid: bool, keep_ground: bool) -> ReadOptions {
     ReadOptions {
+        keep_ground,
         invalid: if drop_invalid {
             InvalidSamples::DropAndCount
         } else {
@@ -202,7 +204,7 @@ pub fn fit(cmd: &FitCommand, diagnosis_only: bool) -> Result<(), Failure> {
     let mut job = Identification::new(vehicle)
         .model_options(cmd.options)
         .logs(cmd.logs.iter().cloned())
-        .read_options(read_options(cmd.drop_invalid))
+        .read_options(read_options(cmd.drop_invalid, cmd.keep_ground))
         .holdout(cmd.holdout)
         .diagnose(cmd.diagnose);
     for log in &cmd.validate {

@@ -84,6 +84,10 @@ struct ModelArgs {
     /// instead of stopping at the first.
     #[arg(long)]
     drop_invalid: bool,
+    /// Keep every sample: by default samples on the ground (rotors stopped or idling,
+    /// for a second or more) are left out and each flight is a segment of its own.
+    #[arg(long)]
+    keep_ground: bool,
 }
 
 #[derive(clap::Args)]
@@ -340,6 +344,7 @@ impl FitArgs {
                 rotor_inertia: m.rotor_inertia,
             },
             drop_invalid: m.drop_invalid,
+            keep_ground: m.keep_ground,
             validate: self.validate.clone(),
             holdout: Holdout {
                 blocks: self.holdout_blocks,
