@@ -190,3 +190,61 @@ fn keep_ground_keeps_every_sample() {
     assert_eq!(s.segments, 1);
     assert!(w.report().airborne.is_empty());
 }
+
+fn mrsysid(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_mrsysid"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The CLI says what it kept, in the text report and in the JSON report; a log that is
+/// all ground time ends with exit 1 naming it and the way to keep it.
+#[test]
+fn cli_reports_what_was_kept_and_refuses_a_log_all_on_the_ground() {
+    let (whole, _, _) = logs("cli");
+    let json = whole.with_extension("json");
+    let out = mrsysid(&[
+        "fit",
+        whole.to_str().unwrap(),
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--no-diagnose",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("airborne only: cli-whole.csv: 2 flights, 30.0 s airborne of 53.0 s (2300 samples on the ground left out)"),
+        "{text}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let row = &report["airborne"][0];
+    assert_eq!(row["flights"], 2);
+    assert_eq!(row["ground_samples"], 2300);
+
+    let (header, _) = flight();
+    let mut idle = Vec::new();
+    ground(&header, 0.0, 3000, &mut idle);
+    let path = scratch::dir("airborne").join("cli-ground.csv");
+    write(&path, &header, &idle);
+    let out = mrsysid(&[
+        "fit",
+        path.to_str().unwrap(),
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("no sample left: 3000 of the 3000 rows read are on the ground")
+            && err.contains("--keep-ground"),
+        "{err}"
+    );
+}
