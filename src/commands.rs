@@ -147,7 +147,7 @@ pub struct FitCommand {
 
 fn read_options(drop_invalid: bool, keep_ground: bool) -> ReadOptions {
     ReadOptions {
-        keep_ground,
+        airborne_only: !keep_ground,
         invalid: if drop_invalid {
             InvalidSamples::DropAndCount
         } else {

@@ -118,6 +118,10 @@ fn ground_time_is_left_out_and_the_fit_is_that_of_the_flights() {
     let run = |path: &Path| {
         Identification::new(quad())
             .log(path.to_path_buf())
+            .read_options(ReadOptions {
+                airborne_only: true,
+                ..ReadOptions::default()
+            })
             .diagnose(false)
             .run()
             .unwrap()
@@ -171,16 +175,13 @@ fn ground_time_is_left_out_and_the_fit_is_that_of_the_flights() {
     assert!(ra.airborne.is_empty());
 }
 
-/// With `keep_ground` every row is a sample and the log is one segment.
+/// Without `airborne_only` (the library's default) every row is a sample and the log
+/// is one segment.
 #[test]
-fn keep_ground_keeps_every_sample() {
+fn the_library_keeps_every_sample_unless_asked() {
     let (whole, _, _) = logs("keep");
     let w = Identification::new(quad())
         .log(whole)
-        .read_options(ReadOptions {
-            keep_ground: true,
-            ..ReadOptions::default()
-        })
         .diagnose(false)
         .run()
         .unwrap();
@@ -243,8 +244,10 @@ fn cli_reports_what_was_kept_and_refuses_a_log_all_on_the_ground() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("no sample left: 3000 of the 3000 rows read are on the ground")
-            && err.contains("--keep-ground"),
+        err.contains(
+            "no sample left: 3000 of the 3000 rows read are on the ground: the rotors reach \
+             650 rad/s at most (RMS over the rotors), below the 1252 rad/s"
+        ) && err.contains("--keep-ground"),
         "{err}"
     );
 }

@@ -67,7 +67,7 @@ pub struct Summary {
     /// Motor layout inferred from moments vs individual rotor speeds.
     pub layout: Option<LayoutReport>,
     /// What the airborne detection kept, when it left ground samples out (`None` when
-    /// every sample was kept, and with [`super::ReadOptions::keep_ground`]).
+    /// every sample was kept, and without [`super::ReadOptions::airborne_only`]).
     pub airborne: Option<AirborneSpan>,
 }
 

@@ -229,11 +229,13 @@ pub fn no_samples_error(
             Location::File,
             None,
             ErrorKind::TooShort(format!(
-                "no sample left: {} of the {} rows read are on the ground (the rotors could \
-                 not carry the vehicle's weight even at a thrust coefficient of 0.03, for a \
-                 second or more; docs/data-contract.md, \"Airborne segments\"); --keep-ground \
-                 keeps every row",
-                air.ground_samples, s.rows_read
+                "no sample left: {} of the {} rows read are on the ground: the rotors reach \
+                 {:.0} rad/s at most (RMS over the rotors), below the {:.0} rad/s at which \
+                 they would carry the vehicle's weight at a thrust coefficient of 0.03, or \
+                 not for a second (docs/data-contract.md, \"Airborne segments\"); check the \
+                 vehicle file's mass and rotor_radius and the rotor-speed unit, or keep \
+                 every row with --keep-ground",
+                air.ground_samples, s.rows_read, air.peak_speed, air.lift_speed
             )),
         );
     }

@@ -52,6 +52,12 @@ pub struct AirborneSpan {
     pub airborne_seconds: f64,
     /// Samples left out on the ground.
     pub ground_samples: u64,
+    /// Highest rotor speed of the log, rad/s: the root mean square over the rotors of
+    /// its fastest sample.
+    pub peak_speed: f64,
+    /// Rotor speed, rad/s, at which the rotors would carry the weight at the highest
+    /// plausible thrust coefficient (φ = 1, every rotor alike).
+    pub lift_speed: f64,
 }
 
 /// The detector between the time checks and the window.
@@ -65,6 +71,9 @@ pub(super) struct Detector {
     /// The candidate run that may switch the state, with the break before its first row.
     held: VecDeque<Row>,
     held_break: Break,
+    rotors: f64,
+    /// Largest Σ Ω_i² of a sample, (rad/s)².
+    peak_square: f64,
     /// Rows for the window, with the break before each.
     pub released: VecDeque<(Row, Break)>,
     /// First kept time of the flight under way, s.
@@ -84,6 +93,8 @@ impl Detector {
             on,
             ceiling_per_square: k_max / (facts.mass * STANDARD_GRAVITY),
             ground: false,
+            rotors: facts.rotors as f64,
+            peak_square: 0.0,
             held: VecDeque::new(),
             held_break: Break::None,
             released: VecDeque::new(),
@@ -103,7 +114,9 @@ impl Detector {
             // A run never spans a gap: resolve the candidate as too short.
             self.settle();
         }
-        let phi = self.ceiling_per_square * row.omega[..rotors].iter().map(|w| w * w).sum::<f64>();
+        let square = row.omega[..rotors].iter().map(|w| w * w).sum::<f64>();
+        self.peak_square = self.peak_square.max(square);
+        let phi = self.ceiling_per_square * square;
         let candidate = !self.held.is_empty();
         let threshold = if candidate != self.ground {
             LEAVE_GROUND
@@ -157,6 +170,8 @@ impl Detector {
     pub fn finish(&mut self) -> AirborneSpan {
         self.settle();
         self.end_flight();
+        self.span.peak_speed = (self.peak_square / self.rotors).sqrt();
+        self.span.lift_speed = (1.0 / (self.ceiling_per_square * self.rotors)).sqrt();
         self.span
     }
 

@@ -87,7 +87,7 @@ impl LogReader {
             ..Summary::default()
         };
         let rotors = facts.rotors;
-        let air = Detector::new(&facts, !opts.keep_ground);
+        let air = Detector::new(&facts, opts.airborne_only);
         let mut chunk = SampleChunk::with_capacity(rotors, CHUNK_SAMPLES, plan.has_omega_dot);
         prepare_optional(&mut chunk, &convert.layout);
         Self {
