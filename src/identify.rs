@@ -477,6 +477,11 @@ impl Results {
             o.diagnosis.as_ref(),
         );
         report.loads_low_pass_hz = self.loads_low_pass_hz;
+        report.airborne = o
+            .summaries
+            .iter()
+            .filter_map(crate::report::summary::AirborneRow::of)
+            .collect();
         report
     }
 

@@ -85,6 +85,10 @@ struct ModelArgs {
     /// instead of stopping at the first.
     #[arg(long)]
     drop_invalid: bool,
+    /// Keep every sample: by default samples on the ground (rotors stopped or idling,
+    /// for a second or more) are left out and each flight is a segment of its own.
+    #[arg(long)]
+    keep_ground: bool,
 }
 
 #[derive(clap::Args)]
@@ -341,6 +345,7 @@ impl FitArgs {
             })
             .logs(self.logs.iter().cloned())
             .read_options(ReadOptions {
+                airborne_only: !m.keep_ground,
                 invalid: if m.drop_invalid {
                     InvalidSamples::DropAndCount
                 } else {

@@ -33,6 +33,12 @@ pub struct ReadOptions {
     /// longer when one record is; values below 1 count as 1). The values read do not
     /// depend on it; memory holds a few ranges per parse thread.
     pub range_bytes: usize,
+    /// Fit airborne samples only: samples on the ground (rotors stopped or idling: they
+    /// could not carry the weight at the highest plausible thrust coefficient, for a
+    /// second or more) are left out and the log is split at them
+    /// ([`super::Summary::airborne`]). Off by default here (every sample is kept, as a
+    /// library caller gave it); `mrsysid fit` turns it on unless `--keep-ground`.
+    pub airborne_only: bool,
 }
 
 impl Default for ReadOptions {
@@ -43,6 +49,7 @@ impl Default for ReadOptions {
             derive: DeriveOptions::default(),
             parse_threads: 1,
             range_bytes: DEFAULT_RANGE_BYTES,
+            airborne_only: false,
         }
     }
 }

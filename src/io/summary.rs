@@ -4,6 +4,7 @@
 use std::collections::BTreeMap;
 
 use super::layout::LayoutReport;
+use super::reader::AirborneSpan;
 
 /// Gaps kept in [`Summary::gaps`]; later ones split the log all the same.
 const MAX_GAPS: usize = 100;
@@ -65,6 +66,9 @@ pub struct Summary {
     pub span: f64,
     /// Motor layout inferred from moments vs individual rotor speeds.
     pub layout: Option<LayoutReport>,
+    /// What the airborne detection kept, when it left ground samples out (`None` when
+    /// every sample was kept, and without [`super::ReadOptions::airborne_only`]).
+    pub airborne: Option<AirborneSpan>,
 }
 
 impl Summary {

@@ -211,7 +211,7 @@ pub fn time_unit_suspect(
 }
 
 /// The error of a log that gave no sample (`summary` complete, read with `opts`):
-/// empty, or every row dropped. A log whose rows were all dropped because their
+/// empty, every row on the ground (airborne detection), or every row dropped. A log whose rows were all dropped because their
 /// segments are too short to differentiate cannot support a fit
 /// ([`ErrorKind::TooShort`]), unless its time looks logged in ms or µs (the label of its
 /// time field is `time_label`), which made every step a gap.
@@ -223,6 +223,22 @@ pub fn no_samples_error(
     let s = summary;
     let file = s.file.as_str();
     let too_short = "segment too short to differentiate";
+    if let Some(air) = s.airborne {
+        return IoError::new(
+            file,
+            Location::File,
+            None,
+            ErrorKind::TooShort(format!(
+                "no sample left: {} of the {} rows read are on the ground: the rotors reach \
+                 {:.0} rad/s at most (RMS over the rotors), below the {:.0} rad/s at which \
+                 they would carry the vehicle's weight at a thrust coefficient of 0.03, or \
+                 not for a second (docs/data-contract.md, \"Airborne segments\"); check the \
+                 vehicle file's mass and rotor_radius and the rotor-speed unit, or keep \
+                 every row with --keep-ground",
+                air.ground_samples, s.rows_read, air.peak_speed, air.lift_speed
+            )),
+        );
+    }
     if s.rows_read == 0 || s.dropped.keys().any(|k| k != too_short) {
         return IoError::new(file, Location::File, None, ErrorKind::Empty);
     }

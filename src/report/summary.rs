@@ -37,6 +37,10 @@ pub struct Report {
     /// (consistent filtering); absent when they were not filtered.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loads_low_pass_hz: Option<f64>,
+    /// Per log whose ground time was left out, what was kept (absent when every log
+    /// was kept whole).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub airborne: Vec<AirborneRow>,
     /// Degrees of freedom of the t-tests (N − n_θ, N = fit samples).
     pub degrees_of_freedom: f64,
     /// When set, why the parameters' `std`, `t` and `p` carry no information (the model
@@ -67,6 +71,46 @@ pub struct Report {
     /// Closing the loop: effects the model lacked, added and checked on validation data
     /// (absent with `--no-diagnose`).
     pub diagnosis: Option<DiagnosisReport>,
+}
+
+/// What the airborne detection kept of one log.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AirborneRow {
+    /// The log's file name.
+    pub log: String,
+    /// Flights kept: runs of airborne samples between ground time.
+    pub flights: usize,
+    /// Time airborne, s (the flights' spans).
+    pub airborne_seconds: f64,
+    /// Time from the log's first row to its last, s.
+    pub total_seconds: f64,
+    /// Samples left out on the ground.
+    pub ground_samples: u64,
+}
+
+impl AirborneRow {
+    /// The row of a log's reader summary, `None` when nothing was left out.
+    pub fn of(summary: &crate::io::Summary) -> Option<Self> {
+        summary.airborne.map(|a| Self {
+            log: summary.file.clone(),
+            flights: a.flights,
+            airborne_seconds: a.airborne_seconds,
+            total_seconds: summary.span,
+            ground_samples: a.ground_samples,
+        })
+    }
+
+    /// "2 flights, 412 s airborne of 980 s".
+    pub fn describe(&self) -> String {
+        format!(
+            "{} flight{}, {:.1} s airborne of {:.1} s ({} samples on the ground left out)",
+            self.flights,
+            if self.flights == 1 { "" } else { "s" },
+            self.airborne_seconds,
+            self.total_seconds,
+            self.ground_samples
+        )
+    }
 }
 
 /// Held-out metrics of one cross-validation fold (or of all pooled).
@@ -468,6 +512,7 @@ impl Report {
                 rotors: vehicle.rotor_count(),
             },
             model: structure.options,
+            airborne: Vec::new(),
             loads_low_pass_hz: None,
             degrees_of_freedom: fit.mmr.dof,
             inference_withheld: fit.mmr.inference_withheld.clone(),

@@ -247,6 +247,9 @@ fn header(out: &mut String, r: &Report) {
             "; regressor signals low-passed at {hz} Hz as the loads were (consistent filtering)"
         ))
     );
+    for a in &r.airborne {
+        let _ = writeln!(out, "airborne only: {}: {}\n", a.log, a.describe());
+    }
 }
 
 /// FSOA table, one row per candidate term and one column per iteration (the seed's

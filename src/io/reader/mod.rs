@@ -4,11 +4,14 @@
 //! follow it to differentiate and flag spikes ([`emit`]). Chunks hold at most
 //! [`CHUNK_SAMPLES`] samples, each inside one segment unless segments are joined.
 
+mod airborne;
 mod convert;
 mod emit;
 mod plan;
 mod segment;
 
+pub use airborne::AirborneSpan;
+use airborne::Detector;
 use convert::Converter;
 use emit::Differentiator;
 use plan::{Plan, VehicleFacts};
@@ -59,6 +62,8 @@ pub struct LogReader {
     out: Handout,
     tally: Tally,
     diff: Differentiator,
+    /// Leaves ground time out.
+    air: Detector,
 }
 
 impl LogReader {
@@ -82,6 +87,7 @@ impl LogReader {
             ..Summary::default()
         };
         let rotors = facts.rotors;
+        let air = Detector::new(&facts, opts.airborne_only);
         let mut chunk = SampleChunk::with_capacity(rotors, CHUNK_SAMPLES, plan.has_omega_dot);
         prepare_optional(&mut chunk, &convert.layout);
         Self {
@@ -104,6 +110,7 @@ impl LogReader {
                 unit_stats: UnitStats::default(),
             },
             diff: Differentiator::default(),
+            air,
         }
     }
 

@@ -1,13 +1,15 @@
 //! The look-ahead window of the current segment and how rows enter it: a row whose time
 //! does not increase is dropped or refused, a step longer than `max_gap` (or a logger
 //! dropout) closes the segment, never bridged; the motor lag of an actuator map is
-//! applied between consecutive rows.
+//! applied between consecutive rows; then the airborne detector ([`super::airborne`])
+//! leaves ground time out, closing the segment at it.
 
 use std::collections::VecDeque;
 
 use super::super::error::{ErrorKind, IoError};
 use super::super::options::InvalidSamples;
 use super::LogReader;
+use super::airborne::Break;
 use super::convert::Row;
 
 /// The rows of the current segment not yet dropped behind, and where the segment stands.
@@ -25,6 +27,12 @@ pub(super) struct Window {
     pub segment: usize,
     /// Samples emitted from the current segment.
     pub segment_samples: u64,
+    /// Time of the last row that passed the time checks (kept or not), s.
+    pub last_t: Option<f64>,
+    /// That row, when a motor lag needs it.
+    pub last_row: Option<Row>,
+    /// The source is exhausted (rows may still wait in the airborne detector).
+    pub read_all: bool,
 }
 
 impl Window {
@@ -61,21 +69,46 @@ impl LogReader {
         }
     }
 
-    /// Closes the segment at the gap from `last` (s) to `row`, which starts the next.
-    fn close_segment(&mut self, last: f64, row: Row) {
-        self.tally.summary.record_gap(last, row.t);
+    /// Closes the segment before `row`, which starts the next: at a time gap (recorded
+    /// in the summary) or after ground time.
+    fn close_segment(&mut self, brk: Break, row: Row) {
+        if let Break::Gap(last) = brk {
+            self.tally.summary.record_gap(last, row.t);
+        }
         self.window.pending = Some(row);
     }
 
     /// Gets the next row that continues the current segment into the window, or marks
-    /// the segment end (gap or end of file).
+    /// the segment end (gap, ground time or end of file).
     pub(super) fn fill(&mut self) -> Result<(), IoError> {
+        loop {
+            if let Some((row, brk)) = self.air.released.pop_front() {
+                if brk != Break::None && !self.window.rows.is_empty() {
+                    self.close_segment(brk, row);
+                } else {
+                    self.window.rows.push_back(row);
+                }
+                return Ok(());
+            }
+            if self.window.read_all {
+                self.window.done = true;
+                return Ok(());
+            }
+            self.next_row()?;
+        }
+    }
+
+    /// Reads the next row that passes the time checks, applies the motor lag, and hands
+    /// it to the airborne detector; at the end of file, lets the detector finish.
+    fn next_row(&mut self) -> Result<(), IoError> {
         let mut row = Row::default();
         loop {
             match self.pull(&mut row) {
                 Ok(true) => {}
                 Ok(false) => {
-                    self.window.done = true;
+                    self.window.read_all = true;
+                    self.tally.summary.airborne =
+                        Some(self.air.finish()).filter(|span| span.ground_samples > 0);
                     return Ok(());
                 }
                 Err(e) => {
@@ -84,12 +117,11 @@ impl LogReader {
                 }
             }
             let forced = self.source.take_segment_break();
-            if let Some(last) = self.window.rows.back().map(|r| r.t) {
+            let mut brk = Break::None;
+            if let Some(last) = self.window.last_t {
                 if forced && row.t > last {
-                    self.close_segment(last, row);
-                    return Ok(());
-                }
-                if row.t <= last {
+                    brk = Break::Gap(last);
+                } else if row.t <= last {
                     let e = IoError::new(
                         &self.tally.summary.file,
                         row.loc,
@@ -101,15 +133,14 @@ impl LogReader {
                     );
                     self.drop_or_fail(e)?;
                     continue;
-                }
-                if row.t - last > self.opts.max_gap {
-                    self.close_segment(last, row);
-                    return Ok(());
+                } else if row.t - last > self.opts.max_gap {
+                    brk = Break::Gap(last);
                 }
             }
-            if let (Some(tau), Some(last)) = (
+            if let (Some(tau), Some(last), Break::None) = (
                 self.convert.actuator.and_then(|a| a.time_constant),
-                self.window.rows.back(),
+                self.window.last_row.as_ref(),
+                brk,
             ) {
                 // Ω̇ = (c − Ω)/τ solved exactly for a command c linear over the step (as the
                 // aligned command is): Ω = c − ċτ + (Ω_prev − c_prev + ċτ) e^(−Δt/τ).
@@ -123,7 +154,15 @@ impl LogReader {
                     *w = c - lag + (w_prev - c_prev + lag) * decay;
                 }
             }
-            self.window.rows.push_back(row);
+            self.window.last_t = Some(row.t);
+            if self
+                .convert
+                .actuator
+                .is_some_and(|a| a.time_constant.is_some())
+            {
+                self.window.last_row = Some(row);
+            }
+            self.air.push(row, brk, self.vehicle.rotors);
             return Ok(());
         }
     }
