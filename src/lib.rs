@@ -65,6 +65,7 @@ mod identified;
 mod identify;
 mod inputs;
 pub mod io;
+mod loads_scan;
 mod mixing;
 mod model;
 mod on_logs;
@@ -87,6 +88,7 @@ pub use identified::{IdentifiedModel, ModelFileError};
 pub use identify::{Identification, InformationCriteria, ParameterResult, Results};
 pub use inputs::same_file;
 pub use io::{InvalidSamples, IoError, Mapping, ReadOptions};
+pub use loads_scan::{LowPassScan, ScanPoint};
 pub use model::{
     InflowCorrection, ModelError, ModelOptions, ModelStructure, RotorInertiaTerms, Workspace,
 };

@@ -115,8 +115,10 @@ struct FitArgs {
     /// made (e.g. from accelerations through a zero-phase filter, or a smoothing
     /// spline): the regressor signals pass through the same kind of filter (consistent
     /// filtering; as `[loads] low_pass_hz` in a mapping file). The model file keeps it.
-    #[arg(long, value_name = "HZ")]
-    loads_low_pass: Option<f64>,
+    /// `estimate`: the cut-off is not known; the fit is repeated at cut-offs from 64 Hz
+    /// down to 2 Hz and the one predicting held-out loads best is kept (or none).
+    #[arg(long, value_name = "HZ|estimate", value_parser = low_pass_arg)]
+    loads_low_pass: Option<LowPassArg>,
     /// Write the JSON report here.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -234,6 +236,22 @@ struct SimulateArgs {
 
 fn parse_effect(s: &str) -> Result<Effect, String> {
     s.parse()
+}
+
+/// `--loads-low-pass`: a cut-off in Hz, or `estimate`.
+#[derive(Clone, Copy)]
+enum LowPassArg {
+    Hz(f64),
+    Estimate,
+}
+
+fn low_pass_arg(s: &str) -> Result<LowPassArg, String> {
+    if s == "estimate" {
+        return Ok(LowPassArg::Estimate);
+    }
+    s.parse::<f64>()
+        .map(LowPassArg::Hz)
+        .map_err(|_| format!("expected a cut-off in Hz or `estimate`, got `{s}`"))
 }
 
 fn parse_threads(s: &str) -> Result<usize, String> {
@@ -367,8 +385,10 @@ impl FitArgs {
         if let Some(threads) = self.threads {
             job = job.threads(threads);
         }
-        if let Some(hz) = self.loads_low_pass {
-            job = job.loads_low_pass(hz);
+        match self.loads_low_pass {
+            Some(LowPassArg::Hz(hz)) => job = job.loads_low_pass(hz),
+            Some(LowPassArg::Estimate) => job = job.estimate_loads_low_pass(),
+            None => {}
         }
         job
     }

@@ -812,7 +812,8 @@ fn cross_validated_r2(v: &serde_json::Value, axis: &str) -> f64 {
 /// R² 0.9 % → 98.8 % measured); the model file keeps the cut-off, so `validate` on the
 /// same log filters alike. On the clean flight of the same seed the same declaration is
 /// wrong, and the yaw moment is lost (99.7 % → 0.8 % measured): the cut-off must be
-/// the log's, never a tuning knob.
+/// the log's, never a tuning knob. Estimated from the data instead, the cut-off is
+/// found on the smoothed log and none is kept on the clean one.
 #[test]
 fn declared_load_smoothing_is_matched_by_the_regressors_and_hurts_where_absent() {
     let smoothed = tmp("smoothed_5hz.csv");
@@ -912,6 +913,36 @@ fn declared_load_smoothing_is_matched_by_the_regressors_and_hurts_where_absent()
         cross_validated_r2(&clean_declared, "Mz"),
     );
     assert!(a > 0.9 && b < 0.5, "clean flight Mz {a} -> {b}");
+
+    // Not declared but estimated (`--loads-low-pass estimate`): the scan keeps a cut-off
+    // near the log's (5.7 Hz measured: the crate's sinc³ filter at 5.7 Hz matches a
+    // 2nd-order Butterworth at 5 Hz run forwards and backwards; 4 Hz scores within 0.6 %
+    // of it) and on the clean flight keeps none (every filter from 11 Hz down loses the
+    // yaw moment; above 16 Hz a 100 Hz log's filter window holds one sample and does
+    // nothing, so those tie with unfiltered and unfiltered is kept).
+    let (estimated, model) = fit(&smoothed, "smoothed_estimated", Some("estimate"));
+    let chosen = estimated["loads_low_pass_hz"].as_f64();
+    assert!(
+        matches!(chosen, Some(hz) if (4.0..=5.7).contains(&hz)),
+        "{chosen:?}"
+    );
+    assert!(cross_validated_r2(&estimated, "Mz") > 0.9);
+    let points = estimated["loads_low_pass_scan"]["points"]
+        .as_array()
+        .unwrap();
+    assert!(
+        points[0]["cutoff_hz"].is_null() && points.len() >= 5,
+        "{points:?}"
+    );
+    assert!(
+        std::fs::read_to_string(&model)
+            .unwrap()
+            .contains(&format!("loads_low_pass_hz = {:?}", chosen.unwrap()))
+    );
+    let (clean_estimated, _) = fit(&clean, "clean_estimated", Some("estimate"));
+    assert!(clean_estimated["loads_low_pass_hz"].is_null());
+    assert!(clean_estimated["loads_low_pass_scan"]["chosen_hz"].is_null());
+    assert_eq!(cross_validated_r2(&clean_estimated, "Mz"), a);
 }
 
 /// A loads cut-off that is not a positive number of Hz is refused, on the command line

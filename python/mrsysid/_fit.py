@@ -27,7 +27,8 @@ def fit(
     drop_invalid: bool = False,
     holdout_blocks: int = 5,
     holdout_guard: float = 2.0,
-    loads_low_pass: Optional[float] = None,
+    loads_low_pass: Union[float, str, None] = None,
+    keep_ground: bool = False,
     residual_pass: bool = True,
 ) -> Results:
     """Identifies the vehicle's model from logs: FSOA term ordering, the multivariate
@@ -61,6 +62,13 @@ def fit(
             (Hz) when they were made (from accelerations through a zero-phase filter, or
             a smoothing spline): the regressor signals pass through the same kind of
             filter (consistent filtering; as ``[loads] low_pass_hz`` in a mapping file).
+            ``"estimate"``: the cut-off is not known; the fit is repeated with the
+            regressors low-passed from 64 Hz down to 2 Hz and the cut-off whose model
+            predicts held-out loads best is kept, or none (``Results.report()``'s
+            ``loads_low_pass_scan`` lists the scan).
+        keep_ground: fit ground time too (idling rotors before take-off, after
+            landing); by default, as ``mrsysid fit``, only the airborne segments of log
+            files are fitted (rotor thrust below the weight for 1 s or more is ground).
         residual_pass: run the second pass (residual diagnostics and the
             coloured-residual correction of σ); the diagnosis runs it regardless.
 
@@ -79,6 +87,11 @@ def fit(
         else:
             name = "validate" if len(items) == 1 else f"validate[{k}]"
             validate_tables.extend(named_tables(v, name))
+    estimate = isinstance(loads_low_pass, str)
+    if estimate and loads_low_pass != "estimate":
+        raise ValueError(
+            f"loads_low_pass: a cut-off in Hz or \"estimate\", got {loads_low_pass!r}"
+        )
     native = _mrsysid.fit(
         vehicle,
         logs=log_paths,
@@ -94,7 +107,9 @@ def fit(
         drop_invalid=drop_invalid,
         holdout_blocks=holdout_blocks,
         holdout_guard=holdout_guard,
-        loads_low_pass=loads_low_pass,
+        loads_low_pass=None if estimate else loads_low_pass,
+        estimate_loads_low_pass=estimate,
+        keep_ground=keep_ground,
         residual_pass=residual_pass,
     )
     return Results(native)

@@ -82,6 +82,8 @@ def fit(
     holdout_blocks: int,
     holdout_guard: float,
     loads_low_pass: Optional[float],
+    estimate_loads_low_pass: bool,
+    keep_ground: bool,
     residual_pass: bool,
 ) -> Results:
     """Runs the fit with the GIL released; Ctrl-C raises ``KeyboardInterrupt``."""

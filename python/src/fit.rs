@@ -27,7 +27,8 @@ const SIGNAL_POLL: Duration = Duration::from_millis(50);
 #[pyfunction]
 #[pyo3(signature = (
     vehicle, *, logs, tables, validate_logs, validate_tables, mapping, diagnose, threads,
-    inflow, linear_vh, rotor_inertia, drop_invalid, holdout_blocks, holdout_guard, loads_low_pass, residual_pass
+    inflow, linear_vh, rotor_inertia, drop_invalid, holdout_blocks, holdout_guard, loads_low_pass, estimate_loads_low_pass, keep_ground,
+    residual_pass
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
@@ -47,6 +48,8 @@ pub fn fit<'py>(
     holdout_blocks: usize,
     holdout_guard: f64,
     loads_low_pass: Option<f64>,
+    estimate_loads_low_pass: bool,
+    keep_ground: bool,
     residual_pass: bool,
 ) -> PyResult<Results> {
     let options = ModelOptions {
@@ -63,6 +66,7 @@ pub fn fit<'py>(
             } else {
                 InvalidSamples::Error
             },
+            airborne_only: !keep_ground,
             ..ReadOptions::default()
         })
         .holdout(Holdout {
@@ -74,6 +78,9 @@ pub fn fit<'py>(
         .logs(logs);
     if let Some(hz) = loads_low_pass {
         job = job.loads_low_pass(hz);
+    }
+    if estimate_loads_low_pass {
+        job = job.estimate_loads_low_pass();
     }
     for log in validate_logs {
         job = job.validate(log);

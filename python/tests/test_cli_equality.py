@@ -77,3 +77,25 @@ def test_predictions_equal_the_cli_predict(cli, tmp_path: Path, flight_fit):
     np.testing.assert_allclose(from_log[["t"] + cols], theirs[["t"] + cols], rtol=RTOL, atol=0)
     # The model in memory predicts what the saved one does (TOML keeps f64 exactly).
     pd.testing.assert_frame_equal(flight_fit.model.predict(states), from_states, check_exact=True)
+
+
+def test_an_estimated_loads_cut_off_and_kept_ground_equal_the_cli(cli, tmp_path: Path, quad_x):
+    """`loads_low_pass="estimate"` scans cut-offs as `--loads-low-pass estimate` does
+    (the shipped flight's loads were not smoothed: none is kept), and `keep_ground`
+    is `--keep-ground`."""
+    report = tmp_path / "estimated.json"
+    run_cli(cli, "fit", FLIGHT, "--vehicle", QUAD_X, "--json", report, "--no-diagnose",
+            "--loads-low-pass", "estimate", "--keep-ground", "--threads", "2", "--quiet")
+    theirs = json.loads(report.read_text())
+    ours = mrsysid.fit(quad_x, logs=FLIGHT, diagnose=False, threads=2,
+                       loads_low_pass="estimate", keep_ground=True).report()
+    assert_close_tree(ours, theirs)
+    scan = ours["loads_low_pass_scan"]
+    assert scan["chosen_hz"] is None and "loads_low_pass_hz" not in ours
+    assert scan["points"][0]["cutoff_hz"] is None and len(scan["points"]) >= 4
+    try:
+        mrsysid.fit(quad_x, logs=FLIGHT, loads_low_pass="guess")
+    except ValueError as e:
+        assert "estimate" in str(e)
+    else:
+        raise AssertionError("loads_low_pass='guess' was taken")

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::diagnose::{CandidateScore, Diagnosis, Reading, Role};
 use crate::estimate::remainder::AxisRemainder;
 use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
+use crate::loads_scan::LowPassScan;
 use crate::model::{ModelOptions, ModelStructure};
 use crate::sample::Axis;
 use crate::vehicle::Vehicle;
@@ -37,6 +38,10 @@ pub struct Report {
     /// (consistent filtering); absent when they were not filtered.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loads_low_pass_hz: Option<f64>,
+    /// When the cut-off was estimated: each cut-off tried (Hz, `null` unfiltered) with
+    /// the final model's held-out score (mean ln RMSE over the axes) and R² per axis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loads_low_pass_scan: Option<LowPassScan>,
     /// Per log whose ground time was left out, what was kept (absent when every log
     /// was kept whole).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -514,6 +519,7 @@ impl Report {
             model: structure.options,
             airborne: Vec::new(),
             loads_low_pass_hz: None,
+            loads_low_pass_scan: None,
             degrees_of_freedom: fit.mmr.dof,
             inference_withheld: fit.mmr.inference_withheld.clone(),
             parameters: fit

@@ -8,6 +8,7 @@ use std::fmt::Write;
 
 use super::summary::{AxisRow, DiagnosisReport, FsoaReport, Report};
 use crate::diagnose::Reading;
+use crate::loads_scan::LowPassScan;
 
 /// All tables, as printed by `mrsysid fit`.
 pub fn render(report: &Report) -> String {
@@ -250,6 +251,43 @@ fn header(out: &mut String, r: &Report) {
     for a in &r.airborne {
         let _ = writeln!(out, "airborne only: {}: {}\n", a.log, a.describe());
     }
+    if let Some(scan) = &r.loads_low_pass_scan {
+        low_pass_scan(out, scan);
+    }
+}
+
+/// The cut-offs tried when the loads' low-pass was estimated, with the one kept.
+fn low_pass_scan(out: &mut String, scan: &LowPassScan) {
+    let _ = writeln!(
+        out,
+        "loads low-pass estimated: {}; held-out score per cut-off tried (mean ln RMSE over \
+         the axes, lower is better; * kept):",
+        scan.chosen_hz.map_or(
+            "none (no cut-off paid 0.5 % over unfiltered)".to_string(),
+            |hz| { format!("{hz} Hz") }
+        )
+    );
+    let _ = writeln!(
+        out,
+        "{:>10} {:>8} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7}",
+        "cut-off", "score", "Fx R2", "Fy R2", "Fz R2", "Mx R2", "My R2", "Mz R2"
+    );
+    for p in &scan.points {
+        let name = p
+            .cutoff_hz
+            .map_or("none".to_string(), |hz| format!("{hz} Hz"));
+        let _ = write!(out, "{name:>10} {:>8.4}", p.score);
+        for r2 in p.r2 {
+            let _ = write!(out, " {:>7.1}", 100.0 * r2);
+        }
+        let mark = if p.cutoff_hz == scan.chosen_hz {
+            "  *"
+        } else {
+            ""
+        };
+        let _ = writeln!(out, "{mark}");
+    }
+    let _ = writeln!(out);
 }
 
 /// FSOA table, one row per candidate term and one column per iteration (the seed's
