@@ -1,147 +1,21 @@
-//! Residual diagnostics of the MMR model: a streaming, mergeable second pass.
-//!
-//! Per axis: a histogram with its fitted Gaussian and the linearity of ordered residuals
-//! against the inverse normal CDF (seed Figure 3), and the residual autocorrelation up to
-//! lag L. For the estimates: coloured-residual corrected standard errors after Morelli
-//! (Morelli & Klein 2016, §5.2), generalised to the six-output weighted fit of Eq. 24:
-//!
-//! Cov(θ̂) = B⁻¹ [Σ_{k=−L}^{L} Σ_t Σ_ab H_{t,a}ᵀ (W Γ(k) W)_ab H_{t+k,b}] B⁻¹,
-//!
-//! with B = Hᵀ(R⁻¹⊗I)H, W = R⁻¹, and Γ(k)_ab = (1/N) Σ_t v_{t,a} v_{t+k,b} the residual
-//! cross-correlation at lag k (the stationary R_vv of Morelli's formula). For white
-//! residuals (Γ(k) = 0, k ≠ 0, Γ(0) = R) it reduces to B⁻¹. Lags beyond L are taken as
-//! zero (rectangular window), so the pass costs O(N·L·p²) for p regressor columns
-//! (computed per chunk as L matrix products): linear in N, never O(N²).
-//!
-//! The per-axis OLS estimates get Morelli's formula itself,
-//! Cov(θ̂_i) = (X_iᵀX_i)⁻¹ [Σ_{k=−L}^{L} r_i(k) Σ_t x_t x_{t+k}ᵀ] (X_iᵀX_i)⁻¹, with r_i the
-//! autocorrelation of that axis' OLS residuals.
-//!
-//! The pass keeps the lag products Σ_t x_t x_{t+k}ᵀ and Σ_t v_t v_{t+k}ᵀ and the first and
-//! last L rows it saw, so two passes over consecutive segments merge exactly (the cross
-//! terms across the seam are added at merge time). The regressors' lag products are kept
-//! over the distinct column shapes, as the accumulator keeps its factor: a column that is
-//! a constant multiple f of another (`u*dt` of F_x and `h*u*dt` of M_y) has lag products
-//! f × those of the other, so quadrotor× needs 30 of its 38 columns (0.6× the flops).
+//! The streaming residual pass ([`ResidualPass`]): per chunk the residuals of the MMR
+//! and per-axis OLS models, their histograms and the lag products of regressors and
+//! residuals, merged across segments, and at the end the coloured-residual corrected
+//! standard errors.
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
-use serde::Serialize;
-use statrs::distribution::{ContinuousCDF, Normal};
 
-use super::Fit;
+use super::math::{add_lag_products, quadratic_diagonal, sandwich6};
+use super::scores::normal_probability_correlation;
+use super::{AxisResiduals, ColouredStdError, DiagnosticOptions, Histogram, ResidualDiagnostics};
+use crate::estimate::Fit;
 use crate::model::{ModelStructure, Workspace};
 use crate::sample::{Axis, SampleChunk};
 use crate::stats::AccumulateError;
 
-/// Options of the residual pass.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct DiagnosticOptions {
-    /// Largest lag L (samples) of the autocorrelation and of the coloured-residual
-    /// correction. Choose it past the lag where the residual autocorrelation dies out.
-    pub max_lag: usize,
-    /// Histogram bins per axis.
-    pub bins: usize,
-    /// Histogram range ± this many residual standard deviations (σ̂ from the fit);
-    /// residuals outside are counted in under/overflow cells.
-    pub range_sigmas: f64,
-}
-
-impl Default for DiagnosticOptions {
-    fn default() -> Self {
-        Self {
-            max_lag: 10,
-            bins: 60,
-            range_sigmas: 6.0,
-        }
-    }
-}
-
-/// Histogram of one axis' residuals.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Histogram {
-    /// Lower edge of the first bin, N or N m.
-    pub lo: f64,
-    /// Upper edge of the last bin, N or N m.
-    pub hi: f64,
-    /// Counts per equal-width bin.
-    pub counts: Vec<u64>,
-    /// Residuals below `lo`.
-    pub below: u64,
-    /// Residuals at or above `hi`.
-    pub above: u64,
-    /// Smallest residual.
-    pub min: f64,
-    /// Largest residual.
-    pub max: f64,
-}
-
-impl Histogram {
-    /// `(lower edge, upper edge, count)` of every cell in order, the underflow cell
-    /// spanning min..lo and the overflow cell hi..max (N or N m).
-    pub fn cells(&self) -> Vec<(f64, f64, u64)> {
-        let width = (self.hi - self.lo) / self.counts.len().max(1) as f64;
-        let mut cells = Vec::with_capacity(self.counts.len() + 2);
-        cells.push((self.min, self.lo, self.below));
-        cells.extend(self.counts.iter().enumerate().map(|(b, &c)| {
-            let lo = self.lo + b as f64 * width;
-            (lo, lo + width, c)
-        }));
-        cells.push((self.hi, self.max, self.above));
-        cells
-    }
-}
-
-/// Residual diagnostics of one axis.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct AxisResiduals {
-    /// Output axis.
-    pub axis: Axis,
-    /// Mean of the fitted Gaussian (residual mean), N or N m.
-    pub mean: f64,
-    /// Standard deviation of the fitted Gaussian, N or N m.
-    pub std_dev: f64,
-    /// Histogram.
-    pub histogram: Histogram,
-    /// Correlation of ordered residuals with Φ⁻¹((i − 3/8)/(N + 1/4)) (Blom positions);
-    /// order statistics are placed uniformly within histogram bins, so the value is
-    /// resolved to about the bin width.
-    pub normal_probability_correlation: f64,
-    /// Autocorrelation ρ(k) = Γ_aa(k)/Γ_aa(0), k = 0..=L.
-    pub autocorrelation: Vec<f64>,
-    /// ±1.96/√N: the 95 % band of ρ(k) for white residuals.
-    pub white_band95: f64,
-}
-
-/// Standard error of one MMR estimate, white and coloured-residual corrected.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ColouredStdError {
-    /// Parameter name.
-    pub name: String,
-    /// σ(θ̂) assuming white residuals (from the fit).
-    pub white: f64,
-    /// σ(θ̂) corrected for coloured residuals (Morelli); NaN if the truncated estimate of
-    /// the variance came out negative.
-    pub coloured: f64,
-}
-
 /// Residual row width: the six MMR residuals, then the six per-axis OLS residuals.
 const VW: usize = 12;
-
-/// Result of the residual pass.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ResidualDiagnostics {
-    /// Samples seen.
-    pub samples: u64,
-    /// Lag L used.
-    pub max_lag: usize,
-    /// Per axis, [`Axis`] order.
-    pub axes: Vec<AxisResiduals>,
-    /// Per estimated MMR parameter.
-    pub std_errors: Vec<ColouredStdError>,
-    /// Per axis ([`Axis`] order), per kept OLS term (named `param (label)`).
-    pub ols_std_errors: Vec<Vec<ColouredStdError>>,
-}
 
 /// The per-axis OLS model the pass evaluates alongside the MMR.
 #[derive(Debug, Clone)]
@@ -584,64 +458,6 @@ fn prediction_coefficients(structure: &ModelStructure, fit: &Fit) -> Mat<f64> {
     m
 }
 
-/// Adds S_k = Σ_{t+k<n} x_t x_{t+k}ᵀ, k = 0..=l (l < n), of the `n` row-major rows of
-/// width `w` in `rows` to `dst` ((l+1) blocks of w × w, row-major).
-///
-/// All lags are one matrix product (faer): the rows t < n − l, transposed, times the
-/// w × (l+1)w view whose row t is x_t, x_{t+1}, …, x_{t+l} side by side. In row-major
-/// storage that row is the contiguous slice starting at x_t, so the view shares the
-/// rows' memory (row stride w, overlapping rows) and nothing is copied. The last l rows'
-/// lags, which run past the end, are added as outer products.
-fn add_lag_products(
-    rows: &[f64],
-    w: usize,
-    n: usize,
-    l: usize,
-    dst: &mut [f64],
-    scratch: &mut Vec<f64>,
-) {
-    if n == 0 {
-        return;
-    }
-    let m = n - l;
-    // The chunk's products S, w × (l+1)w column-major in `scratch`: S[i, c] at c w + i.
-    let cols = (l + 1) * w;
-    scratch.resize(w * cols, 0.0);
-    let xt = MatRef::from_column_major_slice_with_stride(rows, w, m, w);
-    let shifted = MatRef::from_row_major_slice_with_stride(rows, m, cols, w);
-    let s = MatMut::from_column_major_slice_mut(&mut scratch[..w * cols], w, cols);
-    matmul(s, Accum::Replace, xt, shifted, 1.0, Par::Seq);
-    for t in m..n {
-        let xs = &rows[t * w..(t + 1) * w];
-        for k in 0..n - t {
-            let xk = &rows[(t + k) * w..(t + k + 1) * w];
-            for (j, &xj) in xk.iter().enumerate() {
-                let column = &mut scratch[(k * w + j) * w..(k * w + j + 1) * w];
-                column.iter_mut().zip(xs).for_each(|(d, &xi)| *d += xi * xj);
-            }
-        }
-    }
-    for (k, block) in dst.chunks_exact_mut(w * w).take(l + 1).enumerate() {
-        for j in 0..w {
-            let column = &scratch[(k * w + j) * w..(k * w + j + 1) * w];
-            for (row, &v) in block.chunks_exact_mut(w).zip(column) {
-                row[j] += v;
-            }
-        }
-    }
-}
-
-/// (B M B)_dd = Σ_pq B_dp M_pq B_qd for k × k row-major B (symmetric) and M.
-fn quadratic_diagonal(b: &[f64], m: &[f64], k: usize, d: usize) -> f64 {
-    let mut var = 0.0;
-    for p in 0..k {
-        for q in 0..k {
-            var += b[d * k + p] * m[p * k + q] * b[q * k + d];
-        }
-    }
-    var
-}
-
 /// The first `w` columns of the chunk assembled in `ws` as row-major rows.
 fn row_major(ws: &Workspace, w: usize) -> Vec<f64> {
     let n = ws.len();
@@ -668,129 +484,6 @@ fn last_rows(rows: Rows, l: usize, q: usize) -> Rows {
     Rows {
         x: rows.x[(n - l) * q..].to_vec(),
         v: rows.v[(n - l) * VW..].to_vec(),
-    }
-}
-
-/// W Γ W for 6 × 6 matrices.
-fn sandwich6(w: &[[f64; 6]; 6], g: &[[f64; 6]; 6]) -> [[f64; 6]; 6] {
-    let mut wg = [[0.0; 6]; 6];
-    for i in 0..6 {
-        for j in 0..6 {
-            wg[i][j] = (0..6).map(|k| w[i][k] * g[k][j]).sum();
-        }
-    }
-    let mut out = [[0.0; 6]; 6];
-    for i in 0..6 {
-        for j in 0..6 {
-            out[i][j] = (0..6).map(|k| wg[i][k] * w[k][j]).sum();
-        }
-    }
-    out
-}
-
-/// Pearson correlation of ordered residuals with Blom normal scores, order statistics
-/// spread uniformly within each histogram cell (under/overflow cells span min..lo and
-/// hi..max).
-fn normal_probability_correlation(h: &Histogram, count: u64) -> f64 {
-    let n = count as f64;
-    let mut sums = ScoreSums::default();
-    let mut before = 0u64;
-    for (lo, hi, c) in h.cells() {
-        // The cell in pieces: ranks among the first or last EXACT_CELL, where the normal
-        // scores are too curved for the integrals, and the ones between.
-        let head = EXACT_CELL.saturating_sub(before).min(c);
-        let tail = (count.saturating_sub(EXACT_CELL + before)).clamp(head, c);
-        for (piece, (i0, i1)) in [(0, head), (head, tail), (tail, c)].into_iter().enumerate() {
-            let m = i1 - i0;
-            let at = |i: u64| lo + (hi - lo) * i as f64 / c as f64;
-            let (a, b) = (at(i0), at(i1));
-            if piece == 1 && m > EXACT_CELL {
-                sums.add_integrated(a, b, m, before + i0, n);
-            } else {
-                sums.add_exact(a, b, m, before + i0, n);
-            }
-        }
-        before += c;
-    }
-    sums.correlation(n)
-}
-
-/// Pieces of a cell of at most this many residuals, and the ranks this close to either
-/// end, get their normal scores one by one; the rest by the integrals of the scores
-/// over their span of plotting positions.
-const EXACT_CELL: u64 = 64;
-
-/// Σx, Σy, Σx², Σy², Σxy of residuals x and their Blom normal scores y.
-#[derive(Default)]
-struct ScoreSums {
-    x: f64,
-    y: f64,
-    xx: f64,
-    yy: f64,
-    xy: f64,
-}
-
-impl ScoreSums {
-    /// The cell's `c` residuals, spread uniformly over lo..hi, after `before` smaller
-    /// ones: ranks before + 1 ..= before + c of `n`, scores y = Φ⁻¹((rank − 3/8)/(n + 1/4)).
-    fn add_exact(&mut self, lo: f64, hi: f64, c: u64, before: u64, n: f64) {
-        let normal = Normal::new(0.0, 1.0).expect("standard normal");
-        for i in 0..c {
-            let x = lo + (hi - lo) * (i as f64 + 0.5) / c as f64;
-            let y = normal.inverse_cdf(((before + i + 1) as f64 - 0.375) / (n + 0.25));
-            self.add(x, y);
-        }
-    }
-
-    fn add(&mut self, x: f64, y: f64) {
-        self.x += x;
-        self.y += y;
-        self.xx += x * x;
-        self.yy += y * y;
-        self.xy += x * y;
-    }
-
-    /// The same sums as [`ScoreSums::add_exact`], the scores' by the midpoint rule read
-    /// backwards: the plotting positions p_i are spaced h = 1/(n + 1/4) apart, so
-    /// Σ g(p_i) ≈ (1/h) ∫ g(p) dp over the cell's positions ± h/2, with closed forms in
-    /// u = Φ⁻¹(p) (φ the normal density): ∫ Φ⁻¹ dp = −φ(u), ∫ (Φ⁻¹)² dp = p − uφ(u),
-    /// ∫ p Φ⁻¹ dp = −pφ(u) + Φ(u√2)/(2√π). The residual x is linear in p over the cell.
-    /// With the Euler–Maclaurin correction of the cell's ends the rule's error is
-    /// O(h⁴ g⁗) per score (test below).
-    fn add_integrated(&mut self, lo: f64, hi: f64, c: u64, before: u64, n: f64) {
-        let normal = Normal::new(0.0, 1.0).expect("standard normal");
-        let scale = n + 0.25;
-        let (pa, pb) = (
-            (before as f64 + 0.125) / scale,
-            ((before + c) as f64 + 0.125) / scale,
-        );
-        let (ua, ub) = (normal.inverse_cdf(pa), normal.inverse_cdf(pb));
-        let density = |u: f64| (-0.5 * u * u).exp() / (2.0 * std::f64::consts::PI).sqrt();
-        let (fa, fb) = (density(ua), density(ub));
-        let second = |p: f64, u: f64, f: f64| {
-            -p * f + normal.cdf(u * std::f64::consts::SQRT_2) / (2.0 * std::f64::consts::PI.sqrt())
-        };
-        let y1 = fa - fb;
-        let y2 = (pb - pa) - (ub * fb - ua * fa);
-        let yp = second(pb, ub, fb) - second(pa, ua, fa);
-        // x(p) = mid + slope (p − pm) over the cell, pm its middle position.
-        let slope = (hi - lo) / (pb - pa);
-        let pm = 0.5 * (pa + pb);
-        let c = c as f64;
-        let mid = 0.5 * (lo + hi);
-        self.x += c * mid;
-        self.xx += c * mid * mid + (hi - lo).powi(2) * (c * c - 1.0) / (12.0 * c);
-        // Euler–Maclaurin's next term, −(h/24)[g′] over the cell, with (Φ⁻¹)′ = 1/φ(u).
-        let edge = 1.0 / (24.0 * scale);
-        self.y += scale * y1 - edge * (1.0 / fb - 1.0 / fa);
-        self.yy += scale * y2 - edge * 2.0 * (ub / fb - ua / fa);
-        self.xy += scale * (mid * y1 + slope * (yp - pm * y1))
-            - edge * (slope * (ub - ua) + hi / fb - lo / fa);
-    }
-
-    fn correlation(&self, n: f64) -> f64 {
-        let cov = self.xy - self.x * self.y / n;
-        cov / ((self.xx - self.x * self.x / n) * (self.yy - self.y * self.y / n)).sqrt()
     }
 }
 
@@ -869,53 +562,6 @@ mod tests {
                     );
                 }
             }
-        }
-    }
-
-    /// Σ over every residual of the cell, as [`ScoreSums::add_exact`] does for small ones.
-    fn exact(h: &Histogram, count: u64) -> f64 {
-        let mut sums = ScoreSums::default();
-        let mut rank = 0;
-        for (lo, hi, c) in h.cells() {
-            sums.add_exact(lo, hi, c, rank, count as f64);
-            rank += c;
-        }
-        sums.correlation(count as f64)
-    }
-
-    fn histogram(counts: Vec<u64>, below: u64, above: u64) -> Histogram {
-        let bins = counts.len() as f64;
-        Histogram {
-            lo: -3.0,
-            hi: 3.0,
-            counts,
-            below,
-            above,
-            min: -3.0 - 6.0 / bins * 2.0,
-            max: 3.0 + 6.0 / bins * 5.0,
-        }
-    }
-
-    /// Integrating the normal scores over large cells gives the per-residual sum's
-    /// correlation to 1e-10 (7e-12 and 5e-12 measured; 1e-9 off before the ranks
-    /// nearest the ends were summed one by one and the Euler–Maclaurin term added): Gaussian counts of 2e5 residuals in 60 bins with tails in
-    /// the overflow cells, and a skewed histogram of 1e6 whose tail cells hold more than
-    /// [`EXACT_CELL`] residuals each (integrated too) — 1 − r, what a reader compares,
-    /// there ~1e-3 to 1e-1.
-    #[test]
-    fn integrated_scores_match_the_per_residual_sum() {
-        let gauss: Vec<u64> = (0..60)
-            .map(|b| {
-                let x = -3.0 + (b as f64 + 0.5) * 0.1;
-                (2e5 * 0.1 * (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt()) as u64
-            })
-            .collect();
-        let skew: Vec<u64> = (0..60).map(|b| 100 + (b * b * b) as u64 / 10).collect();
-        for h in [histogram(gauss, 30, 40), histogram(skew, 500, 80)] {
-            let count = h.counts.iter().sum::<u64>() + h.below + h.above;
-            let (fast, slow) = (normal_probability_correlation(&h, count), exact(&h, count));
-            assert!((fast - slow).abs() < 1e-10, "{fast} vs {slow}");
-            assert!(slow < 0.9999, "a case that tests something: {slow}");
         }
     }
 }
