@@ -95,8 +95,7 @@ pub use model::{
 pub use on_logs::Validation;
 pub use pipeline::{FitOutcome, Holdout, PlotSeries};
 pub use report::summary::Report;
-pub use sample::{Axis, CHUNK_SAMPLES, Sample, SampleChunk};
-pub use slow::TRIM_BANDS_HZ;
+pub use sample::{Axis, CHUNK_SAMPLES, Sample, SampleChunk, TRIM_BANDS_HZ};
 pub use source::{LogSource, MemoryLog};
 pub use util::write_atomically;
 pub use vehicle::{Vehicle, VehicleSource};

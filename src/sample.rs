@@ -9,6 +9,12 @@
 /// 1024 samples × ~40 regressor columns × 8 bytes stays inside a core's L2 cache.
 pub const CHUNK_SAMPLES: usize = 1024;
 
+/// Cut-offs (−3 dB, Hz) of the slow rotor-thrust signals
+/// ([`SampleChunk::omega_squared_slow`], filled by the fit pipeline): each is one form of
+/// the trim moment, from below to about the bandwidth of a small multirotor's attitude
+/// loop.
+pub const TRIM_BANDS_HZ: [f64; 3] = [0.5, 1.0, 2.0];
+
 /// The six force and moment axes of Eq. 22, in output order.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
@@ -326,7 +332,7 @@ impl SampleChunk {
             }
         }
         if self.has_omega_squared_slow() {
-            let bands = crate::slow::TRIM_BANDS_HZ.len();
+            let bands = TRIM_BANDS_HZ.len();
             if self.omega_squared_slow.len() != bands * self.omega.len() {
                 return Err(shape(
                     "omega_squared_slow".into(),

@@ -10,12 +10,8 @@
 //! each sample, not a response to rotor speeds later than the load.
 
 use crate::held::HeldChunks;
-use crate::sample::SampleChunk;
+use crate::sample::{SampleChunk, TRIM_BANDS_HZ};
 use crate::smooth::LowPass;
-
-/// Cut-offs (−3 dB, Hz) of the slow rotor-thrust signals: each is one form of the trim
-/// moment, from below to about the bandwidth of a small multirotor's attitude loop.
-pub const TRIM_BANDS_HZ: [f64; 3] = [0.5, 1.0, 2.0];
 
 /// Fills [`SampleChunk::omega_squared_slow`] of a stream of chunks: chunks are held
 /// until every band's low-pass has passed their last sample (1.5 windows, 0.8 s at the

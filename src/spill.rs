@@ -42,7 +42,7 @@ const BUFFER_BYTES: usize = 1 << 18;
 
 /// Most rotor series a chunk read back may claim, 64 rotors in every band (guards
 /// against a corrupted file).
-const MAX_ROTORS: u32 = 64 * crate::slow::TRIM_BANDS_HZ.len() as u32;
+const MAX_ROTORS: u32 = 64 * crate::sample::TRIM_BANDS_HZ.len() as u32;
 
 /// A spill file; removes it when dropped.
 #[derive(Debug)]
@@ -352,7 +352,7 @@ mod tests {
                     .iter()
                     .map(|w| w.iter().map(|x| -x).collect())
                     .collect();
-                c.omega_squared_slow = (0..crate::slow::TRIM_BANDS_HZ.len() * rotors)
+                c.omega_squared_slow = (0..crate::sample::TRIM_BANDS_HZ.len() * rotors)
                     .map(|i| {
                         c.omega[i % rotors]
                             .iter()

@@ -62,7 +62,8 @@ pub use mapping::{
 pub use open::{LogFormat, log_format, open_log};
 pub use options::{InvalidSamples, ReadOptions};
 pub use px4::{Px4Rotor, layout_check, rotors_from_parameters, vehicle_skeleton};
-pub use reader::{AirborneSpan, LogReader};
+pub use reader::LogReader;
+pub use summary::AirborneSpan;
 pub use summary::{Dropout, Gap, Summary};
 pub use ulog::{LogDefinitions, read_definitions};
 

@@ -4,7 +4,6 @@
 use std::collections::BTreeMap;
 
 use super::layout::LayoutReport;
-use super::reader::AirborneSpan;
 
 /// Gaps kept in [`Summary::gaps`]; later ones split the log all the same.
 const MAX_GAPS: usize = 100;
@@ -97,4 +96,21 @@ impl Summary {
             self.first_dropped.push(message);
         }
     }
+}
+
+/// What was kept of a log by the airborne detection.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AirborneSpan {
+    /// Flights: runs of airborne samples between ground time.
+    pub flights: usize,
+    /// Time airborne, s: the sum of the flights' spans (first to last kept sample).
+    pub airborne_seconds: f64,
+    /// Samples left out on the ground.
+    pub ground_samples: u64,
+    /// Highest rotor speed of the log, rad/s: the root mean square over the rotors of
+    /// its fastest sample.
+    pub peak_speed: f64,
+    /// Rotor speed, rad/s, at which the rotors would carry the weight at the highest
+    /// plausible thrust coefficient (φ = 1, every rotor alike).
+    pub lift_speed: f64,
 }

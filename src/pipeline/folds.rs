@@ -55,7 +55,7 @@ pub(super) fn arrange(
 
 /// The held-out statistics where each local candidate acts, per fold as [`arrange`]
 /// builds the folds (`parts`: the local statistics of each fold's held-out samples, per
-/// region, see [`super::second_pass::LocalGroup`]): a block of a single log, or a whole
+/// region, see [`super::pass_share::LocalGroup`]): a block of a single log, or a whole
 /// log left out. A region with fewer active held-out samples than it needs in some fold
 /// is left out (judged globally).
 pub(super) fn local_folds(

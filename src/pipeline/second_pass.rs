@@ -6,9 +6,9 @@
 
 use std::sync::atomic::Ordering;
 
-use super::blocks::BlockPlan;
 use super::first_pass::LogCounts;
 use super::folds::{arrange, local_folds, merge};
+use super::pass_share::{Extended, LogPass, PassContext, Start};
 use super::remainder::remainder;
 use super::request::check_cancel;
 use super::segment_pass::SegmentPass;
@@ -16,14 +16,12 @@ use super::split::Role;
 use super::stream::stream_log;
 use super::threads::{run_in_order, run_jobs, segments};
 use super::{FitOutcome, FitRequest, PlotSeries, accumulate_error};
-use crate::diagnose::local::{ActivityParts, LocalRegions};
 use crate::diagnose::{
-    Candidate, CandidateContext, CandidateStatistics, DiagnoseOptions, candidate_set_on_threads,
+    CandidateContext, CandidateStatistics, DiagnoseOptions, candidate_set_on_threads,
     diagnose_on_threads, hover_thrust_coefficient,
 };
 use crate::error::Error;
 use crate::estimate::{DiagnosticOptions, Fit, ResidualDiagnostics, ResidualPass};
-use crate::model::{ModelStructure, Reuse};
 use crate::sample::{SampleChunk, Signals};
 use crate::source::LogSource;
 use crate::spill::Spill;
@@ -40,17 +38,6 @@ pub(super) fn count_progress(req: &FitRequest, chunk: &SampleChunk) -> Result<()
 
 /// Points kept per plotted series: buckets of the whole run keep their first sample.
 const PLOT_POINTS: u64 = 4000;
-
-/// Candidate effects added to the base structure, with their parameter indices.
-pub(super) struct Extended {
-    pub(super) structure: ModelStructure,
-    pub(super) candidates: Vec<Candidate>,
-    pub(super) params: Vec<Vec<usize>>,
-    pub(super) regions: LocalRegions,
-    /// The columns its accumulators store, and how they are assembled from each other.
-    pub(super) stored: Vec<bool>,
-    pub(super) plan: Vec<Option<Reuse>>,
-}
 
 impl Extended {
     /// Named candidates for data with `signals`, plus the generic-pool terms that
@@ -86,43 +73,6 @@ impl Extended {
         })
     }
 }
-
-/// What every log's second pass shares (read only).
-pub(super) struct PassContext<'a> {
-    pub(super) req: &'a FitRequest,
-    /// MMR estimates θ̂ in `req.structure.params` order.
-    pub(super) theta: &'a [f64],
-    /// An empty residual pass to start each log from.
-    pub(super) residuals: ResidualPass,
-    /// Candidate effects, when diagnosing.
-    pub(super) extended: Option<Extended>,
-    /// The blocks of a single fit log.
-    pub(super) plan: Option<&'a BlockPlan>,
-    /// Plot decimation: every `stride`-th sample of the whole run (fit, validation).
-    pub(super) strides: [u64; 2],
-}
-
-/// One log's share of the second pass. Shares merge in job order into the result of a
-/// pass over all logs one after another.
-pub(super) struct LogPass {
-    pub(super) residuals: ResidualPass,
-    /// Plot series (fit, validation); time counted from `span.0` of the kind.
-    pub(super) series: [PlotSeries; 2],
-    /// First and last sample time of each kind in this log, s (NaN when none).
-    pub(super) span: [(f64, f64); 2],
-    /// Candidate-effect statistics when diagnosing: of the whole log, or of each piece
-    /// of a single fit log's blocks (`None` while a piece has no sample).
-    pub(super) candidates: Option<Vec<Option<Accumulator>>>,
-    /// The same over the samples where local candidates act, by activity pattern, per
-    /// [`LocalGroup`] of the log.
-    pub(super) local: Vec<ActivityParts>,
-}
-
-/// The local-region statistics a run of samples goes to: those of the held-out data of
-/// a fold, which is each of several fit logs whole (group 0) or each block of a single
-/// fit log (group = block); `None` for a validation log (it reports, never decides).
-/// [`local_folds`] uses nothing else.
-pub(super) type LocalGroup = Option<usize>;
 
 /// Streams the data again (each log file from its spill, in job order with `jobs`):
 /// residual diagnostics of the fit samples, decimated series of both parts for plots,
@@ -271,15 +221,6 @@ fn lay_end_to_end(
             t_offset[k] += last - first;
         }
     }
-}
-
-/// Where a segment of a log's second pass starts.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Start {
-    /// Samples of each kind (fit, validation) before it, in this log and the logs before.
-    pub(super) seen: [u64; 2],
-    /// The same in this log only.
-    pub(super) in_log: [u64; 2],
 }
 
 /// A log as its second pass reads it.

@@ -4,7 +4,7 @@
 //! share.
 
 use super::accumulate_error;
-use super::second_pass::{LocalGroup, LogPass, PassContext, Start};
+use super::pass_share::{LocalGroup, LogPass, PassContext, Start};
 use super::split::Role;
 use crate::diagnose::local::ActivityParts;
 use crate::error::Error;

@@ -10,7 +10,7 @@
 //!   ΔM_x = −k_x c_T δ²a_slow,  ΔM_y = −k_y c_T δ²e_slow,  ΔM_z = −k_z c_Q δ²r_slow,
 //!
 //! with δ²_slow the zero-phase low-pass of δ² = M_ix Ω² (Eq. 19–20) at one cut-off of
-//! [`crate::TRIM_BANDS_HZ`] ([`crate::slow`]), c_T the thrust per Ω² that carries the
+//! [`crate::TRIM_BANDS_HZ`] (filled by `crate::slow`), c_T the thrust per Ω² that carries the
 //! weight on average ([`super::hover_thrust_coefficient`]: the scale is the vehicle's,
 //! not the base fit's) and c_Q = ρπR⁵ Ĉ_Q0 the base fit's drag-torque coefficient (no
 //! yaw part when Ĉ_Q0 ≤ 0): k = 1 is a slow control moment wholly balancing a moment

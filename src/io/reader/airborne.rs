@@ -16,6 +16,7 @@ use std::collections::VecDeque;
 
 use super::convert::Row;
 use super::plan::VehicleFacts;
+use crate::io::summary::AirborneSpan;
 use crate::vehicle::STANDARD_GRAVITY;
 
 /// Largest plausible hover thrust coefficient C_T = T / (ρ π R² (Ω R)²) of a propeller
@@ -41,23 +42,6 @@ pub(super) enum Break {
     Gap(f64),
     /// Ground time was left out before it.
     Ground,
-}
-
-/// What was kept of a log by the airborne detection.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct AirborneSpan {
-    /// Flights: runs of airborne samples between ground time.
-    pub flights: usize,
-    /// Time airborne, s: the sum of the flights' spans (first to last kept sample).
-    pub airborne_seconds: f64,
-    /// Samples left out on the ground.
-    pub ground_samples: u64,
-    /// Highest rotor speed of the log, rad/s: the root mean square over the rotors of
-    /// its fastest sample.
-    pub peak_speed: f64,
-    /// Rotor speed, rad/s, at which the rotors would carry the weight at the highest
-    /// plausible thrust coefficient (φ = 1, every rotor alike).
-    pub lift_speed: f64,
 }
 
 /// The detector between the time checks and the window.

@@ -10,7 +10,6 @@ mod emit;
 mod plan;
 mod segment;
 
-pub use airborne::AirborneSpan;
 use airborne::Detector;
 use convert::Converter;
 use emit::Differentiator;

@@ -1,0 +1,55 @@
+//! The checks that refuse a request right after the first pass, once each log's clock
+//! and length are known.
+
+use super::blocks::TooShort;
+use super::first_pass::LogStats;
+use super::request::FitRequest;
+use crate::error::{Error, RequestError};
+use crate::io;
+use crate::source::LogSource;
+
+/// The error of the first log file (fit or validation, `per_log` in job order) whose time
+/// looks logged in ms or µs: a median step over 1 s or a span over a day
+/// ([`io::time_unit_suspect`]). Its blocks or its dynamics would be cut on a wrong clock.
+pub(super) fn time_unit_error(req: &FitRequest, per_log: &[LogStats]) -> Result<(), Error> {
+    let sources = req.logs.iter().chain(&req.validate);
+    for (source, log) in sources.zip(per_log) {
+        let s = &log.summary;
+        if !matches!(source, LogSource::File(_)) {
+            continue;
+        }
+        let consequence = ", far slower than any flight log";
+        if let Some(text) =
+            io::time_unit_suspect(s.median_time_step, s.span, s.rows_read, consequence)
+        {
+            return Err(io::IoError::new(
+                &s.file,
+                io::Location::File,
+                None,
+                io::ErrorKind::Mapping(text),
+            )
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// The error of a single fit log (`log`, read as `req.logs[0]`) too short for its blocks
+/// (`short`); a clock in ms or µs was refused before ([`time_unit_error`]).
+pub(super) fn too_short(req: &FitRequest, log: &LogStats, short: TooShort) -> Error {
+    let s = &log.summary;
+    let (span, median_step) = match &req.logs[0] {
+        LogSource::Memory(_) => (short.span, None),
+        LogSource::File(_) => (s.span, s.median_time_step),
+    };
+    let samples = short.samples;
+    RequestError::HoldoutTooShort {
+        log: s.file.clone(),
+        samples,
+        span,
+        median_step,
+        blocks: req.holdout.blocks,
+        guard_seconds: req.holdout.guard_seconds,
+    }
+    .into()
+}
