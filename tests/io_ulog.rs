@@ -142,7 +142,10 @@ fn dropout_is_reported_and_never_bridged() {
     assert_eq!(
         summary.first_dropped[2],
         "dropout.ulg: byte 20187, field \"vehicle_local_position\": no messages within \
-         align_gap = 0.3 s around t = 2.004 s (or a logger dropout between them)"
+         align_gap = 0.3 s around t = 2.004 s (or a logger dropout between them; raise \
+         `[mcap] align_gap` for a slow topic, or log it faster next time: SDLOG_PROFILE bit 4 \
+         (high rate) or bit 3 (system identification), ESC telemetry by bidirectional DShot, \
+         DSHOT_BIDIR_EN = 1)"
     );
 }
 
@@ -434,6 +437,18 @@ fn malformed_catalogue() {
         good.bytes().to_vec(),
         &mm,
         "small: field \"vehicle_acceleration\": topic not in the log (logged topics: s)".into(),
+    );
+    // 16b. Rotor speeds from a topic not in the log: what to set on the vehicle next time.
+    let mut mm = m.clone();
+    mm.signals.rotor_speeds.as_mut().unwrap().topic = Some("esc_status".into());
+    push(
+        "no-esc-status",
+        good.bytes().to_vec(),
+        &mm,
+        "small: field \"esc_status\": topic not in the log (logged topics: s); PX4 logs \
+         esc_status with rotor speeds only from ESCs that report them: bidirectional DShot \
+         (DSHOT_BIDIR_EN = 1"
+            .into(),
     );
     // 17. Mapped topic subscribed but without data.
     let mut w = small_log();

@@ -12,6 +12,21 @@ use std::fmt::Write as _;
 
 use crate::vehicle::{Rotor, RotorLayout};
 
+/// What to change on a PX4 vehicle when a log has no rotor-speed telemetry.
+pub(crate) const MISSING_ROTOR_SPEEDS: &str = "PX4 logs esc_status with rotor speeds only \
+     from ESCs that report them: bidirectional DShot (DSHOT_BIDIR_EN = 1, with \
+     MOT_POLE_COUNT), DShot telemetry on a serial port (DSHOT_TEL_CFG) or DroneCAN ESCs; \
+     SDLOG_PROFILE with bit 3 (system identification) or bit 4 (high rate) logs rates, \
+     attitude and actuator outputs fast. Without telemetry, map actuator_outputs with an \
+     `actuator` table (commanded speeds, docs/mapping.md)";
+
+/// Appended to a sample a slow topic could not be aligned to: what to change on the
+/// vehicle (or in the mapping) next time.
+pub(crate) const SLOW_TOPICS: &str = " (or a logger dropout between them; raise \
+     `[mcap] align_gap` for a slow topic, or log it faster next time: SDLOG_PROFILE bit 4 \
+     (high rate) or bit 3 (system identification), ESC telemetry by bidirectional DShot, \
+     DSHOT_BIDIR_EN = 1)";
+
 /// One rotor from PX4's control-allocation parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Px4Rotor {

@@ -8,7 +8,8 @@ use std::path::Path;
 use super::super::Dropout;
 use super::super::align::{Aligner, Message, TopicSource, base_topic};
 use super::super::error::{ErrorKind, IoError, Location, field};
-use super::super::mapping::Mapping;
+use super::super::mapping::{Mapping, Signal};
+use super::super::px4::{MISSING_ROTOR_SPEEDS, SLOW_TOPICS};
 use super::super::slots::SlotLayout;
 use super::format::{Formats, parse_format};
 use super::messages::MessageReader;
@@ -25,6 +26,8 @@ pub struct UlogSource {
     /// `D` data messages read, of any topic.
     data_messages: u64,
     topics: Vec<Topic>,
+    /// Which signal each slot of the topics feeds.
+    layout: SlotLayout,
     align: Aligner,
     /// Dropouts read so far: the epoch of the messages read now.
     epoch: u32,
@@ -63,6 +66,7 @@ impl UlogSource {
             logged: BTreeSet::new(),
             data_messages: 0,
             topics,
+            layout: layout.clone(),
             align: Aligner::new(file, slots, base, align_gap),
             epoch: 0,
             dropouts: Vec::new(),
@@ -193,8 +197,7 @@ impl UlogSource {
 }
 
 impl TopicSource for UlogSource {
-    const GAP_WORDS: (&'static str, &'static str) =
-        ("align_gap", " (or a logger dropout between them)");
+    const GAP_WORDS: (&'static str, &'static str) = ("align_gap", SLOW_TOPICS);
 
     fn aligner(&mut self) -> &mut Aligner {
         &mut self.align
@@ -278,6 +281,15 @@ impl TopicSource for UlogSource {
                 "topic not in the log (logged topics: {})",
                 logged.join(", ")
             )
+        };
+        let feeds_rotors = t
+            .fields
+            .iter()
+            .any(|(slot, _)| self.layout.signal_of_slot(*slot) == Signal::RotorSpeeds);
+        let text = if feeds_rotors {
+            format!("{text}; {MISSING_ROTOR_SPEEDS}")
+        } else {
+            text
         };
         Some(IoError::new(
             &self.file,
