@@ -13,8 +13,8 @@ use mrsysid::report::plots::{self, AxisSeries, NormalProbability, ResidualDensit
 use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
 use mrsysid::{
-    Axis, FitOutcome, Identification, IdentifiedModel, Mapping, PlotSeries, ResidualDiagnostics,
-    Validation, Vehicle, same_file, write_atomically,
+    Axis, FitOutcome, Identification, IdentifiedModel, Mapping, ResidualDiagnostics, Validation,
+    Vehicle, same_file, write_atomically,
 };
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -274,42 +274,42 @@ fn print_reader_notes(out: &FitOutcome) {
 }
 
 fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
-    let series = |s: &PlotSeries| -> Vec<(Axis, Vec<f64>, Vec<f64>)> {
-        Axis::ALL
-            .iter()
-            .map(|&a| {
-                (
-                    a,
-                    s.measured[a as usize].clone(),
-                    s.predicted[a as usize].clone(),
-                )
-            })
-            .collect()
-    };
     let [fit_histories, validation_histories, density, probability] = PLOT_STEMS;
-    for (name, title, s) in [
+    let diagnosed = out.diagnosis.is_some();
+    let (fit_title, validation_title) = if diagnosed {
         (
-            fit_histories,
-            "Fit data: measured vs Eq. 22 model (before diagnosis)",
-            &out.fit_series,
-        ),
+            "Fit data: measured, Eq. 22 model (before diagnosis) and final model",
+            "Validation data: measured, Eq. 22 model (before diagnosis) and final model",
+        )
+    } else {
+        (
+            "Fit data: measured vs Eq. 22 model",
+            "Validation data: measured vs Eq. 22 model",
+        )
+    };
+    for (name, title, s) in [
+        (fit_histories, fit_title, &out.fit_series),
         (
             validation_histories,
-            "Validation data: measured vs Eq. 22 model (before diagnosis)",
+            validation_title,
             &out.validation_series,
         ),
     ] {
         if s.t.is_empty() {
             continue;
         }
-        let cols = series(s);
-        let axes: Vec<AxisSeries> = cols
+        let axes: Vec<AxisSeries> = Axis::ALL
             .iter()
-            .map(|(axis, m, p)| AxisSeries {
-                axis: *axis,
-                t: &s.t,
-                measured: m,
-                predicted: p,
+            .map(|&axis| {
+                let a = axis as usize;
+                AxisSeries {
+                    axis,
+                    t: &s.t,
+                    measured: &s.measured[a],
+                    predicted: &s.predicted[a],
+                    final_model: (!s.final_predicted[a].is_empty())
+                        .then_some(s.final_predicted[a].as_slice()),
+                }
             })
             .collect();
         plots::time_histories(&dir.join(name), title, &axes)?;

@@ -53,6 +53,7 @@ fn time_histories_render() {
             t: &t,
             measured: &z[axis as usize],
             predicted: &y[axis as usize],
+            final_model: Some(&z[axis as usize]),
         })
         .collect();
     let dir = out_dir("time");

@@ -7,6 +7,8 @@ use super::blocks::BlockPlan;
 use crate::diagnose::Diagnosis;
 use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
 use crate::io::Summary;
+use crate::model::{ModelError, ModelStructure, Workspace};
+use crate::sample::SampleChunk;
 use crate::stats::Accumulator;
 
 /// Decimated measured/predicted series for plots, per axis.
@@ -14,10 +16,40 @@ use crate::stats::Accumulator;
 pub struct PlotSeries {
     /// Time, s (logs are laid end to end).
     pub t: Vec<f64>,
-    /// Measured output per axis.
+    /// Measured output per axis (N, N m).
     pub measured: [Vec<f64>; 6],
-    /// Model output per axis.
+    /// The Eq. 22 model's output per axis (N, N m).
     pub predicted: [Vec<f64>; 6],
+    /// The final (diagnosed) model's output per axis (N, N m); empty when the diagnosis
+    /// did not run.
+    pub final_predicted: [Vec<f64>; 6],
+    /// The samples kept, as the regressors saw them, for the final model's output.
+    pub(crate) samples: SampleChunk,
+}
+
+impl PlotSeries {
+    /// Appends `samples` to the samples kept (a chunk of no samples, which may have no
+    /// rotor series at all, adds nothing).
+    pub(crate) fn keep_samples(&mut self, samples: &SampleChunk) {
+        if !samples.is_empty() {
+            self.samples.extend_from(samples, 0..samples.len());
+        }
+    }
+
+    /// Fills [`PlotSeries::final_predicted`]: the output of `structure` with `theta` at
+    /// the samples kept.
+    pub(crate) fn predict_final(
+        &mut self,
+        structure: &ModelStructure,
+        theta: &[f64],
+    ) -> Result<(), ModelError> {
+        if self.samples.is_empty() {
+            return Ok(());
+        }
+        let mut ws = Workspace::default();
+        self.final_predicted = structure.predict_chunk(theta, &self.samples, &mut ws)?;
+        Ok(())
+    }
 }
 
 /// What the pipeline produced.

@@ -197,6 +197,11 @@ pub(super) fn second_pass(
     if counts[..n_fit].iter().all(|c| c.time_series) {
         diagnosis.remainder = remainder(req, jobs, spills, &diagnosis)?;
     }
+    for series in [&mut out.fit_series, &mut out.validation_series] {
+        series
+            .predict_final(&diagnosis.structure, &diagnosis.theta)
+            .map_err(Error::from)?;
+    }
     out.diagnosis = Some(diagnosis);
     Ok(())
 }
@@ -212,6 +217,7 @@ fn lay_end_to_end(
     for (k, series) in [fit, validation].into_iter().enumerate() {
         let part = &share.series[k];
         series.t.extend(part.t.iter().map(|t| t + t_offset[k]));
+        series.keep_samples(&part.samples);
         for a in 0..6 {
             series.measured[a].extend_from_slice(&part.measured[a]);
             series.predicted[a].extend_from_slice(&part.predicted[a]);

@@ -178,6 +178,7 @@ impl SegmentState<'_> {
         let series = &mut self.share.series[k];
         // Absolute time; [`LogPass::times_from_start`] makes it relative.
         series.t.extend_from_slice(&rows.t);
+        series.keep_samples(rows);
         for (a, y) in predicted.into_iter().enumerate() {
             series.measured[a].extend_from_slice(&rows.wrench[a]);
             series.predicted[a].extend(y);
@@ -209,6 +210,7 @@ impl LogPass {
         for (k, mut part) in later.series.into_iter().enumerate() {
             let series = &mut self.series[k];
             series.t.append(&mut part.t);
+            series.keep_samples(&part.samples);
             for a in 0..6 {
                 series.measured[a].append(&mut part.measured[a]);
                 series.predicted[a].append(&mut part.predicted[a]);

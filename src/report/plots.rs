@@ -31,8 +31,11 @@ pub struct AxisSeries<'a> {
     pub t: &'a [f64],
     /// Measured output (N or N m).
     pub measured: &'a [f64],
-    /// Model output (N or N m).
+    /// The Eq. 22 model's output (N or N m).
     pub predicted: &'a [f64],
+    /// The final (diagnosed) model's output (N or N m), drawn beside the Eq. 22 model's
+    /// when given.
+    pub final_model: Option<&'a [f64]>,
 }
 
 /// Residual distribution of one axis: histogram as densities and the fitted Gaussian.
@@ -206,7 +209,14 @@ fn draw_time_histories<DB: DrawingBackend>(
 ) -> Result<(), String> {
     for (area, s) in panels(root, title)?.iter().zip(series) {
         let (t0, t1) = range(s.t.iter().copied());
-        let (y0, y1) = range(s.measured.iter().chain(s.predicted).copied());
+        let final_model = s.final_model.unwrap_or(&[]);
+        let (y0, y1) = range(
+            s.measured
+                .iter()
+                .chain(s.predicted)
+                .chain(final_model)
+                .copied(),
+        );
         let mut chart = ChartBuilder::on(area)
             .margin(12)
             .x_label_area_size(45)
@@ -221,9 +231,12 @@ fn draw_time_histories<DB: DrawingBackend>(
             .label_style((FONT, 16))
             .draw()
             .map_err(|e| e.to_string())?;
-        for (values, colour, label) in
-            [(s.measured, BLACK, "measured"), (s.predicted, RED, "model")]
-        {
+        let lines = [
+            (s.measured, BLACK, "measured"),
+            (s.predicted, RED, "Eq. 22 model"),
+            (final_model, BLUE, "final model"),
+        ];
+        for (values, colour, label) in lines.into_iter().filter(|l| !l.0.is_empty()) {
             let points = decimate(s.t, values);
             let mut runs = runs_without_gaps(&points).into_iter();
             if let Some(first) = runs.next() {
