@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::FitArgs;
 use mrsysid::io;
-use mrsysid::report::plots::{self, AxisSeries, NormalProbability, ResidualDensity};
+use mrsysid::report::plots::{self, AxisSeries, FoldR2, NormalProbability, ResidualDensity};
 use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
 use mrsysid::{
@@ -114,11 +114,12 @@ pub fn check_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Res
 
 /// File names (without extension) of the plots `fit --plots` writes; each is written as
 /// `.svg` and `.png`.
-const PLOT_STEMS: [&str; 4] = [
+const PLOT_STEMS: [&str; 5] = [
     "fit_time_histories",
     "validation_time_histories",
     "residual_density",
     "normal_probability",
+    "cross_validation_r2",
 ];
 
 fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
@@ -274,7 +275,13 @@ fn print_reader_notes(out: &FitOutcome) {
 }
 
 fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
-    let [fit_histories, validation_histories, density, probability] = PLOT_STEMS;
+    let [
+        fit_histories,
+        validation_histories,
+        density,
+        probability,
+        folds,
+    ] = PLOT_STEMS;
     let diagnosed = out.diagnosis.is_some();
     let (fit_title, validation_title) = if diagnosed {
         (
@@ -313,6 +320,26 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
             })
             .collect();
         plots::time_histories(&dir.join(name), title, &axes)?;
+    }
+    if let Some(d) = &out.diagnosis {
+        let axes: Vec<FoldR2> = Axis::ALL
+            .iter()
+            .map(|&axis| {
+                let a = axis as usize;
+                FoldR2 {
+                    axis,
+                    folds: d.folds.clone(),
+                    before: d.before_folds.iter().map(|m| 100.0 * m[a].r2).collect(),
+                    after: d.after_folds.iter().map(|m| 100.0 * m[a].r2).collect(),
+                }
+            })
+            .collect();
+        plots::fold_r2(
+            &dir.join(folds),
+            "Held-out R² per fold, each predicted by the model fitted without it: \
+             Eq. 22 model (red), final model (blue)",
+            &axes,
+        )?;
     }
     if let Some(d) = &out.diagnostics {
         plots::residual_densities(

@@ -3,8 +3,8 @@
 mod scratch;
 use mrsysid::Axis;
 use mrsysid::report::plots::{
-    AxisSeries, NormalProbability, ResidualDensity, normal_probability, residual_densities,
-    time_histories,
+    AxisSeries, FoldR2, NormalProbability, ResidualDensity, fold_r2, normal_probability,
+    residual_densities, time_histories,
 };
 
 fn out_dir(name: &str) -> std::path::PathBuf {
@@ -111,4 +111,32 @@ fn unwritable_directory_is_an_error_naming_the_file() {
             .starts_with("/nonexistent-dir/x.svg: cannot write plot"),
         "{err}"
     );
+}
+
+/// Held-out R² per fold: three logs, one Eq. 22 figure far below the floor (drawn to it,
+/// its value written on the bar, as NeuroBEM's −1587 % pitch), names kept to their
+/// first 22 characters.
+#[test]
+fn fold_r2_renders_with_a_clipped_bar() {
+    let axes: Vec<FoldR2> = Axis::ALL
+        .iter()
+        .map(|&axis| FoldR2 {
+            axis,
+            folds: vec![
+                "figure8_1_20210218170320seg2.csv.gz".into(),
+                "melon".into(),
+                "block 3/3 (12.1-18.1 s)".into(),
+            ],
+            before: vec![-1587.0, 26.8, 5.8],
+            after: vec![57.6, 63.0, 80.0],
+        })
+        .collect();
+    let dir = out_dir("folds");
+    let files = fold_r2(&dir.join("cross_validation_r2"), "folds", &axes).unwrap();
+    assert_written(&files);
+    let svg = std::fs::read_to_string(&files[0]).unwrap();
+    assert!(
+        svg.contains("-1587") && svg.contains("figure8_1_20210218170") && svg.contains("block 3/3")
+    );
+    assert!(!svg.contains("12.1-18.1"));
 }

@@ -65,6 +65,23 @@ pub struct NormalProbability {
     pub correlation: f64,
 }
 
+/// Held-out R² of one axis per cross-validation fold (a held-out log, or a block of a
+/// single log), of the Eq. 22 model and of the final model.
+#[derive(Debug, Clone)]
+pub struct FoldR2 {
+    /// The axis.
+    pub axis: Axis,
+    /// Fold names, in order.
+    pub folds: Vec<String>,
+    /// The Eq. 22 model's R² per fold, %.
+    pub before: Vec<f64>,
+    /// The final model's R² per fold, %.
+    pub after: Vec<f64>,
+}
+
+/// Bars of R² below this (%) are drawn to it, with their value written on them.
+const R2_FLOOR: f64 = -100.0;
+
 const FONT: &str = "sans-serif";
 const SIZE: (u32, u32) = (1500, 1100);
 /// Points drawn per series: longer series are reduced to per-bucket min/max.
@@ -83,6 +100,7 @@ enum Figure<'a> {
     TimeHistories(&'a [AxisSeries<'a>]),
     Densities(&'a [ResidualDensity]),
     NormalProbability(&'a [NormalProbability]),
+    FoldR2(&'a [FoldR2]),
 }
 
 impl Figure<'_> {
@@ -95,6 +113,7 @@ impl Figure<'_> {
             Self::TimeHistories(s) => draw_time_histories(root, title, s),
             Self::Densities(d) => draw_densities(root, title, d),
             Self::NormalProbability(n) => draw_normal_probability(root, title, n),
+            Self::FoldR2(f) => draw_fold_r2(root, title, f),
         }
     }
 }
@@ -150,6 +169,12 @@ pub fn normal_probability(
     axes: &[NormalProbability],
 ) -> Result<Vec<PathBuf>, PlotError> {
     write_both(stem, title, Figure::NormalProbability(axes))
+}
+
+/// Held-out R² per fold, Eq. 22 model (red, left) beside the final model (blue, right),
+/// one panel per axis; the title should say which colour is which.
+pub fn fold_r2(stem: &Path, title: &str, axes: &[FoldR2]) -> Result<Vec<PathBuf>, PlotError> {
+    write_both(stem, title, Figure::FoldR2(axes))
 }
 
 fn panels<DB: DrawingBackend>(
@@ -334,6 +359,70 @@ fn draw_densities<DB: DrawingBackend>(
             chart
                 .draw_series(LineSeries::new(curve, RED.stroke_width(2)))
                 .map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(())
+}
+
+fn draw_fold_r2<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    axes: &[FoldR2],
+) -> Result<(), String> {
+    for (area, f) in panels(root, title)?.iter().zip(axes) {
+        let lowest = f.before.iter().chain(&f.after).copied().fold(0.0, f64::min);
+        let y0 = (lowest.max(R2_FLOOR) / 25.0).floor() * 25.0;
+        let n = f.folds.len().max(1);
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .caption(f.axis.name(), (FONT, 24))
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, y0..100.0)
+            .map_err(|e| e.to_string())?;
+        let names = f.folds.clone();
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(2 * n + 1)
+            .x_label_formatter(&move |x| {
+                let k = x.round();
+                match names.get(k as usize) {
+                    Some(name) if (x - k).abs() < 1e-9 && k >= 0.0 => {
+                        // A block by its number alone: its span would overlap the next.
+                        name.split(" (")
+                            .next()
+                            .unwrap_or(name)
+                            .chars()
+                            .take(22)
+                            .collect()
+                    }
+                    _ => String::new(),
+                }
+            })
+            .y_desc("held-out R² [%]")
+            .label_style((FONT, 16))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (values, colour, offset) in [(&f.before, RED, -0.4), (&f.after, BLUE, 0.0)] {
+            let bars = values.iter().enumerate().map(move |(k, &r2)| {
+                let x = k as f64 + offset;
+                Rectangle::new([(x, y0.max(r2)), (x + 0.4, 0.0)], colour.mix(0.6).filled())
+            });
+            chart.draw_series(bars).map_err(|e| e.to_string())?;
+            let clipped =
+                values
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, r2)| **r2 < y0)
+                    .map(move |(k, r2)| {
+                        Text::new(
+                            format!("{r2:.0}"),
+                            (k as f64 + offset, y0 + 0.08 * (100.0 - y0)),
+                            (FONT, 14).into_font(),
+                        )
+                    });
+            chart.draw_series(clipped).map_err(|e| e.to_string())?;
         }
     }
     Ok(())
