@@ -9,7 +9,9 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::FitArgs;
 use mrsysid::io;
-use mrsysid::report::plots::{self, AxisSeries, FoldR2, NormalProbability, ResidualDensity};
+use mrsysid::report::plots::{
+    self, AxisSeries, EffectResidual, FoldR2, NormalProbability, ResidualDensity,
+};
 use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
 use mrsysid::{
@@ -114,12 +116,13 @@ pub fn check_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Res
 
 /// File names (without extension) of the plots `fit --plots` writes; each is written as
 /// `.svg` and `.png`.
-const PLOT_STEMS: [&str; 5] = [
+const PLOT_STEMS: [&str; 6] = [
     "fit_time_histories",
     "validation_time_histories",
     "residual_density",
     "normal_probability",
     "cross_validation_r2",
+    "added_effects",
 ];
 
 fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
@@ -281,6 +284,7 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
         density,
         probability,
         folds,
+        added,
     ] = PLOT_STEMS;
     let diagnosed = out.diagnosis.is_some();
     let (fit_title, validation_title) = if diagnosed {
@@ -339,6 +343,26 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
             "Held-out R² per fold, each predicted by the model fitted without it: \
              Eq. 22 model (red), final model (blue)",
             &axes,
+        )?;
+    }
+    let effects: Vec<EffectResidual> = out
+        .fit_series
+        .effects
+        .iter()
+        .map(|e| EffectResidual {
+            name: &e.name,
+            axis: e.axis,
+            load: &e.load,
+            before: &e.before,
+            after: &e.after,
+        })
+        .collect();
+    if !effects.is_empty() {
+        plots::effect_residuals(
+            &dir.join(added),
+            "Added effects (fit data): residual without (red) and with (blue) each effect \
+             against its load",
+            &effects,
         )?;
     }
     if let Some(d) = &out.diagnostics {

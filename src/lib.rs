@@ -93,7 +93,7 @@ pub use model::{
     InflowCorrection, ModelError, ModelOptions, ModelStructure, RotorInertiaTerms, Workspace,
 };
 pub use on_logs::Validation;
-pub use pipeline::{FitOutcome, Holdout, PlotSeries};
+pub use pipeline::{EffectSeries, FitOutcome, Holdout, PlotSeries};
 pub use report::summary::Report;
 pub use sample::{Axis, CHUNK_SAMPLES, Sample, SampleChunk, TRIM_BANDS_HZ};
 pub use source::{LogSource, MemoryLog};

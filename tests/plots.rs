@@ -3,8 +3,8 @@
 mod scratch;
 use mrsysid::Axis;
 use mrsysid::report::plots::{
-    AxisSeries, FoldR2, NormalProbability, ResidualDensity, fold_r2, normal_probability,
-    residual_densities, time_histories,
+    AxisSeries, EffectResidual, FoldR2, NormalProbability, ResidualDensity, effect_residuals,
+    fold_r2, normal_probability, residual_densities, time_histories,
 };
 
 fn out_dir(name: &str) -> std::path::PathBuf {
@@ -139,4 +139,30 @@ fn fold_r2_renders_with_a_clipped_bar() {
         svg.contains("-1587") && svg.contains("figure8_1_20210218170") && svg.contains("block 3/3")
     );
     assert!(!svg.contains("12.1-18.1"));
+}
+
+/// Partial residuals of two added effects render (one panel each).
+#[test]
+fn effect_residuals_render() {
+    let load: Vec<f64> = (0..2000).map(|i| (i as f64 * 0.01).sin()).collect();
+    let after: Vec<f64> = (0..2000).map(|i| 0.05 * (i as f64 * 0.37).cos()).collect();
+    let before: Vec<f64> = load.iter().zip(&after).map(|(l, a)| l + a).collect();
+    let effects = [
+        EffectResidual {
+            name: "quadratic airframe drag, along the airflow",
+            axis: Axis::Fx,
+            load: &load,
+            before: &before,
+            after: &after,
+        },
+        EffectResidual {
+            name: "trim moment, 2 Hz",
+            axis: Axis::My,
+            load: &load,
+            before: &before,
+            after: &after,
+        },
+    ];
+    let dir = out_dir("effects");
+    assert_written(&effect_residuals(&dir.join("added_effects"), "effects", &effects).unwrap());
 }

@@ -44,7 +44,7 @@ mod stream;
 mod threads;
 
 pub use feed::stream_for_model;
-pub use outcome::{FitOutcome, PlotSeries};
+pub use outcome::{EffectSeries, FitOutcome, PlotSeries};
 pub use request::{FitRequest, Holdout};
 
 use first_pass::{LogCounts, read_log};

@@ -7,8 +7,8 @@ use super::blocks::BlockPlan;
 use crate::diagnose::Diagnosis;
 use crate::estimate::{AxisMetrics, CrossValidation, Fit, ResidualDiagnostics};
 use crate::io::Summary;
-use crate::model::{ModelError, ModelStructure, Workspace};
-use crate::sample::SampleChunk;
+use crate::model::{ModelError, Workspace};
+use crate::sample::{Axis, SampleChunk};
 use crate::stats::Accumulator;
 
 /// Decimated measured/predicted series for plots, per axis.
@@ -23,8 +23,29 @@ pub struct PlotSeries {
     /// The final (diagnosed) model's output per axis (N, N m); empty when the diagnosis
     /// did not run.
     pub final_predicted: [Vec<f64>; 6],
+    /// Per effect the diagnosis added, on the axis it improved most: its load against
+    /// the residual it explains (a partial-residual plot). Empty without the diagnosis.
+    pub effects: Vec<EffectSeries>,
     /// The samples kept, as the regressors saw them, for the final model's output.
     pub(crate) samples: SampleChunk,
+}
+
+/// One added effect at the samples kept: the load it adds in the final model, the
+/// residual of the final model without it (before) and with it (after). Where the
+/// effect explains what Eq. 22 missed, "before" lies along the load and "after" is
+/// flat.
+#[derive(Debug, Clone)]
+pub struct EffectSeries {
+    /// The effect's name.
+    pub name: String,
+    /// The axis shown: where its load is the largest share of the measured variation.
+    pub axis: Axis,
+    /// The effect's load in the final model (N or N m).
+    pub load: Vec<f64>,
+    /// Measured minus the final model without the effect (N or N m).
+    pub before: Vec<f64>,
+    /// Measured minus the final model (N or N m).
+    pub after: Vec<f64>,
 }
 
 impl PlotSeries {
@@ -36,18 +57,57 @@ impl PlotSeries {
         }
     }
 
-    /// Fills [`PlotSeries::final_predicted`]: the output of `structure` with `theta` at
-    /// the samples kept.
-    pub(crate) fn predict_final(
-        &mut self,
-        structure: &ModelStructure,
-        theta: &[f64],
-    ) -> Result<(), ModelError> {
+    /// Fills [`PlotSeries::final_predicted`] and [`PlotSeries::effects`] from the
+    /// diagnosis `d`: the final model's output at the samples kept, and each added
+    /// effect's load (the final model's output less its output with the effect's
+    /// parameters set to zero).
+    pub(crate) fn predict_final(&mut self, d: &Diagnosis) -> Result<(), ModelError> {
         if self.samples.is_empty() {
             return Ok(());
         }
         let mut ws = Workspace::default();
-        self.final_predicted = structure.predict_chunk(theta, &self.samples, &mut ws)?;
+        let predict =
+            |theta: &[f64], ws: &mut Workspace| d.structure.predict_chunk(theta, &self.samples, ws);
+        let full = predict(&d.theta, &mut ws)?;
+        let mut effects = Vec::new();
+        for effect in &d.effects_added {
+            let mut theta = d.theta.clone();
+            for p in &effect.parameters {
+                if let Some(j) = d.structure.param_index(&p.name) {
+                    theta[j] = 0.0;
+                }
+            }
+            let without = predict(&theta, &mut ws)?;
+            let share = |a: usize| {
+                let load: f64 = full[a]
+                    .iter()
+                    .zip(&without[a])
+                    .map(|(f, w)| (f - w).powi(2))
+                    .sum();
+                load / centred_sum_of_squares(&self.samples.wrench[a]).max(f64::MIN_POSITIVE)
+            };
+            let a = (0..6)
+                .max_by(|&i, &j| share(i).total_cmp(&share(j)))
+                .unwrap_or(0);
+            let measured = &self.samples.wrench[a];
+            effects.push(EffectSeries {
+                name: effect.name.clone(),
+                axis: Axis::ALL[a],
+                load: full[a]
+                    .iter()
+                    .zip(&without[a])
+                    .map(|(f, w)| f - w)
+                    .collect(),
+                before: measured
+                    .iter()
+                    .zip(&without[a])
+                    .map(|(z, w)| z - w)
+                    .collect(),
+                after: measured.iter().zip(&full[a]).map(|(z, f)| z - f).collect(),
+            });
+        }
+        self.final_predicted = full;
+        self.effects = effects;
         Ok(())
     }
 }
@@ -106,4 +166,10 @@ pub(super) fn validation_source(req: &FitRequest, plan: Option<&BlockPlan>) -> S
             "leave one log out over {n_fit} logs (each predicted by the model fitted on the others), pooled"
         )
     }
+}
+
+/// Σ (x − x̄)².
+fn centred_sum_of_squares(x: &[f64]) -> f64 {
+    let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
+    x.iter().map(|v| (v - mean).powi(2)).sum()
 }

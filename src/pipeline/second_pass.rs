@@ -198,9 +198,7 @@ pub(super) fn second_pass(
         diagnosis.remainder = remainder(req, jobs, spills, &diagnosis)?;
     }
     for series in [&mut out.fit_series, &mut out.validation_series] {
-        series
-            .predict_final(&diagnosis.structure, &diagnosis.theta)
-            .map_err(Error::from)?;
+        series.predict_final(&diagnosis).map_err(Error::from)?;
     }
     out.diagnosis = Some(diagnosis);
     Ok(())

@@ -79,6 +79,22 @@ pub struct FoldR2 {
     pub after: Vec<f64>,
 }
 
+/// One added effect: its load against the residual without it (before) and with it
+/// (after), at the samples the plots keep (a partial-residual plot).
+#[derive(Debug, Clone, Copy)]
+pub struct EffectResidual<'a> {
+    /// The effect's name (the panel's caption).
+    pub name: &'a str,
+    /// The axis shown (gives the unit).
+    pub axis: Axis,
+    /// The effect's load in the final model (N or N m).
+    pub load: &'a [f64],
+    /// Residual of the final model without the effect (N or N m).
+    pub before: &'a [f64],
+    /// Residual of the final model (N or N m).
+    pub after: &'a [f64],
+}
+
 /// Bars of R² below this (%) are drawn to it, with their value written on them.
 const R2_FLOOR: f64 = -100.0;
 
@@ -101,6 +117,7 @@ enum Figure<'a> {
     Densities(&'a [ResidualDensity]),
     NormalProbability(&'a [NormalProbability]),
     FoldR2(&'a [FoldR2]),
+    Effects(&'a [EffectResidual<'a>]),
 }
 
 impl Figure<'_> {
@@ -114,6 +131,7 @@ impl Figure<'_> {
             Self::Densities(d) => draw_densities(root, title, d),
             Self::NormalProbability(n) => draw_normal_probability(root, title, n),
             Self::FoldR2(f) => draw_fold_r2(root, title, f),
+            Self::Effects(e) => draw_effects(root, title, e),
         }
     }
 }
@@ -175,6 +193,17 @@ pub fn normal_probability(
 /// one panel per axis; the title should say which colour is which.
 pub fn fold_r2(stem: &Path, title: &str, axes: &[FoldR2]) -> Result<Vec<PathBuf>, PlotError> {
     write_both(stem, title, Figure::FoldR2(axes))
+}
+
+/// Per added effect (the first six), the residual without it (red) and with it (blue)
+/// against its load, with the line residual = load: where the effect explains what was
+/// missing, red lies along the line and blue is flat.
+pub fn effect_residuals(
+    stem: &Path,
+    title: &str,
+    effects: &[EffectResidual],
+) -> Result<Vec<PathBuf>, PlotError> {
+    write_both(stem, title, Figure::Effects(effects))
 }
 
 fn panels<DB: DrawingBackend>(
@@ -424,6 +453,42 @@ fn draw_fold_r2<DB: DrawingBackend>(
                     });
             chart.draw_series(clipped).map_err(|e| e.to_string())?;
         }
+    }
+    Ok(())
+}
+
+fn draw_effects<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    effects: &[EffectResidual],
+) -> Result<(), String> {
+    for (area, e) in panels(root, title)?.iter().zip(effects) {
+        let (x0, x1) = range(e.load.iter().copied());
+        let (y0, y1) = range(e.before.iter().chain(e.after).chain(e.load).copied());
+        let caption: String = e.name.chars().take(48).collect();
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .caption(format!("{caption} ({})", e.axis.name()), (FONT, 20))
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|err| err.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(format!("effect's load [{}]", e.axis.unit()))
+            .y_desc(format!("residual [{}]", e.axis.unit()))
+            .label_style((FONT, 16))
+            .draw()
+            .map_err(|err| err.to_string())?;
+        for (values, colour) in [(e.before, RED), (e.after, BLUE)] {
+            let points = e.load.iter().zip(values).map(|(&x, &y)| (x, y));
+            chart
+                .draw_series(points.map(|p| Circle::new(p, 2, colour.mix(0.5).filled())))
+                .map_err(|err| err.to_string())?;
+        }
+        chart
+            .draw_series(LineSeries::new([(x0, x0), (x1, x1)], BLACK.stroke_width(1)))
+            .map_err(|err| err.to_string())?;
     }
     Ok(())
 }
