@@ -228,7 +228,7 @@ fn with_progress<T>(
                     );
                 }
                 bar.set_message(format!(
-                    "{} samples read (two passes)",
+                    "{} samples read (two passes a fit)",
                     count.load(Ordering::Relaxed)
                 ));
                 bar.tick();

@@ -196,7 +196,8 @@ impl Identification {
     /// at each cut-off of a grid (64 Hz down to 2 Hz in steps of √2, up to a quarter of
     /// the sample rate), keeps the one whose final model predicts held-out loads best
     /// (mean ln RMSE over the axes, at least 0.5 % better than unfiltered, else none) and
-    /// reports the scan ([`Results::loads_low_pass_scan`]). Costs up to twelve fits.
+    /// reports the scan ([`Results::loads_low_pass_scan`]). Costs up to twelve fits; a
+    /// [`Identification::progress`] counter counts the samples of all of them.
     /// Overrides [`Identification::loads_low_pass`] and a mapping's `[loads]`.
     pub fn estimate_loads_low_pass(mut self) -> Self {
         self.estimate_low_pass = true;

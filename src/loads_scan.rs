@@ -76,7 +76,6 @@ pub struct LowPassScan {
 pub(crate) fn scan(req: &FitRequest) -> Result<LowPassScan, Error> {
     let mut trial = req.clone();
     trial.validate.clear();
-    trial.progress = None;
     if let Some(m) = trial.mapping.as_mut() {
         m.loads = None;
     }
