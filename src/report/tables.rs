@@ -262,10 +262,13 @@ fn low_pass_scan(out: &mut String, scan: &LowPassScan) {
         out,
         "loads low-pass estimated: {}; held-out score per cut-off tried (mean ln RMSE over \
          the axes, lower is better; * kept):",
-        scan.chosen_hz.map_or(
-            "none (no cut-off paid 0.5 % over unfiltered)".to_string(),
-            |hz| { format!("{hz} Hz") }
-        )
+        match (scan.chosen_hz, scan.points.len()) {
+            (Some(hz), _) => format!("{hz} Hz"),
+            (None, 1) => "none (no cut-off of the grid lies below a quarter of the sample \
+                          rate)"
+                .to_string(),
+            (None, _) => "none (no cut-off paid 0.5 % over unfiltered)".to_string(),
+        }
     );
     let _ = writeln!(
         out,
