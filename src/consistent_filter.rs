@@ -130,9 +130,7 @@ mod tests {
             out.extend_from(&c, 0..c.len());
             Ok(())
         };
-        for start in (0..all.len()).step_by(cut) {
-            let mut c = SampleChunk::with_capacity(2, cut, false);
-            c.extend_from(&all, start..(start + cut).min(all.len()));
+        for c in crate::held::cut(&all, cut) {
             stage.push(c, &mut take).unwrap();
         }
         stage.finish(&mut take).unwrap();

@@ -64,3 +64,14 @@ impl HeldChunks {
         Ok(())
     }
 }
+
+/// `all` cut into chunks of `every` samples (the last shorter), as a reader might
+/// deliver it: the filter stages' tests check their output does not depend on the cut.
+#[cfg(test)]
+pub(crate) fn cut(all: &SampleChunk, every: usize) -> impl Iterator<Item = SampleChunk> + '_ {
+    (0..all.len()).step_by(every).map(move |start| {
+        let mut c = SampleChunk::with_capacity(all.rotor_count(), every, false);
+        c.extend_from(all, start..(start + every).min(all.len()));
+        c
+    })
+}

@@ -268,17 +268,23 @@ impl Identification {
             return Err(e.clone().into());
         }
         let mut request = self.request.clone();
-        let scan = if self.estimate_low_pass {
-            let scan = crate::loads_scan::scan(&request)?;
+        let (scan, outcome) = if self.estimate_low_pass {
+            let (scan, kept_fit) = crate::loads_scan::scan(&request)?;
             request.loads_low_pass_hz = scan.chosen_hz;
             if let Some(m) = request.mapping.as_mut() {
                 m.loads = None;
             }
-            Some(scan)
+            // The trial at the cut-off kept is this fit, unless validation logs (which
+            // no trial reads) are to be reported on.
+            let outcome = if request.validate.is_empty() {
+                kept_fit
+            } else {
+                pipeline::run(&request)?
+            };
+            (Some(scan), outcome)
         } else {
-            None
+            (None, pipeline::run(&request)?)
         };
-        let outcome = pipeline::run(&request)?;
         Ok(Results {
             vehicle: request.vehicle.clone(),
             base: request.structure.clone(),

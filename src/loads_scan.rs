@@ -72,8 +72,9 @@ pub struct LowPassScan {
 
 /// Scans `req` (whose logs are fitted as they are, with their diagnosis when it is on) at
 /// each cut-off; `req`'s own cut-off and its mapping's `[loads]` are ignored. The
-/// request's validation logs are left out of every trial fit.
-pub(crate) fn scan(req: &FitRequest) -> Result<LowPassScan, Error> {
+/// request's validation logs are left out of every trial fit. Also returns the trial
+/// fit at the cut-off kept, which is the request's fit when it has no validation logs.
+pub(crate) fn scan(req: &FitRequest) -> Result<(LowPassScan, FitOutcome), Error> {
     let mut trial = req.clone();
     trial.validate.clear();
     if let Some(m) = trial.mapping.as_mut() {
@@ -90,8 +91,8 @@ pub(crate) fn scan(req: &FitRequest) -> Result<LowPassScan, Error> {
         };
         Ok((point, outcome))
     };
-    let (unfiltered, outcome) = run(None)?;
-    let top = outcome
+    let (unfiltered, unfiltered_fit) = run(None)?;
+    let top = unfiltered_fit
         .summaries
         .iter()
         .filter_map(|s| s.median_time_step)
@@ -100,13 +101,16 @@ pub(crate) fn scan(req: &FitRequest) -> Result<LowPassScan, Error> {
         });
     let mut points = vec![unfiltered];
     let mut best = 0;
+    // The fit at `best` once a cut-off beats unfiltered.
+    let mut best_fit = None;
     let mut worse = 0;
     for &hz in GRID_HZ.iter().filter(|&&hz| hz <= top) {
-        let (point, _) = run(Some(hz))?;
+        let (point, fit) = run(Some(hz))?;
         points.push(point);
         let last = points.len() - 1;
         if points[last].score < points[best].score - TIE {
             best = last;
+            best_fit = Some(fit);
             worse = 0;
         } else if points[last].score > points[best].score + TIE {
             worse += 1;
@@ -115,10 +119,12 @@ pub(crate) fn scan(req: &FitRequest) -> Result<LowPassScan, Error> {
             }
         }
     }
-    let chosen_hz = (points[best].score < points[0].score - MARGIN)
-        .then_some(points[best].cutoff_hz)
-        .flatten();
-    Ok(LowPassScan { points, chosen_hz })
+    let filtered = points[best].score < points[0].score - MARGIN;
+    let (chosen_hz, kept_fit) = match best_fit {
+        Some(fit) if filtered => (points[best].cutoff_hz, fit),
+        _ => (None, unfiltered_fit),
+    };
+    Ok((LowPassScan { points, chosen_hz }, kept_fit))
 }
 
 /// The final model's held-out metrics: after the diagnosis when it ran, else Eq. 22's

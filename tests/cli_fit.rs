@@ -927,6 +927,18 @@ fn declared_load_smoothing_is_matched_by_the_regressors_and_hurts_where_absent()
         "{chosen:?}"
     );
     assert!(cross_validated_r2(&estimated, "Mz") > 0.9);
+    // The fit kept is the scan's trial at that cut-off, not fitted again: the report is
+    // the one of the cut-off declared, bit for bit, but for the scan itself.
+    let hz = format!("{}", chosen.unwrap());
+    let (declared, _) = fit(&smoothed, "smoothed_declared_as_estimated", Some(&hz));
+    let strip = |v: &serde_json::Value| {
+        let mut v = v.clone();
+        let o = v.as_object_mut().unwrap();
+        o.remove("loads_low_pass_scan");
+        o.remove("tool_version");
+        v
+    };
+    assert_eq!(strip(&estimated), strip(&declared));
     let points = estimated["loads_low_pass_scan"]["points"]
         .as_array()
         .unwrap();

@@ -92,33 +92,41 @@ impl<'p, C: FnMut(&SampleChunk) -> Result<(), Error>> Feed<'p, C> {
 impl<C: FnMut(&SampleChunk) -> Result<(), Error>> AfterFilter<'_, C> {
     fn push(&mut self, chunk: &mut SampleChunk) -> Result<(), Error> {
         rotor_jerk(chunk, &self.derive, &mut self.jerk);
-        let (progress, consume) = (self.progress, &mut self.consume);
-        let mut deliver = |c: &SampleChunk| {
-            if let Some(p) = progress {
-                p.fetch_add(c.len() as u64, Ordering::Relaxed);
-            }
-            consume(c)
-        };
-        if !self.slow_wanted {
+        let Self {
+            progress,
+            slow_wanted,
+            slow,
+            consume,
+            ..
+        } = self;
+        let mut deliver = |c: &SampleChunk| deliver(*progress, consume, c);
+        if !*slow_wanted {
             return deliver(chunk);
         }
         let rotors = chunk.rotor_count();
-        let stage = self.slow.get_or_insert_with(|| SlowThrust::new(rotors));
+        let stage = slow.get_or_insert_with(|| SlowThrust::new(rotors));
         stage.push(chunk.clone(), |c| deliver(&c))
     }
 
     fn finish(&mut self) -> Result<(), Error> {
         let (progress, consume) = (self.progress, &mut self.consume);
         match self.slow.as_mut() {
-            Some(stage) => stage.finish(|c| {
-                if let Some(p) = progress {
-                    p.fetch_add(c.len() as u64, Ordering::Relaxed);
-                }
-                consume(&c)
-            }),
+            Some(stage) => stage.finish(|c| deliver(progress, consume, &c)),
             None => Ok(()),
         }
     }
+}
+
+/// Counts `chunk` in `progress` and hands it to `consume`.
+fn deliver<C: FnMut(&SampleChunk) -> Result<(), Error>>(
+    progress: Option<&AtomicU64>,
+    consume: &mut C,
+    chunk: &SampleChunk,
+) -> Result<(), Error> {
+    if let Some(p) = progress {
+        p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
+    }
+    consume(chunk)
 }
 
 /// Streams the log file at `path` as `model` needs it: read with `mapping`, its regressor

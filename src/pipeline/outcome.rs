@@ -66,9 +66,10 @@ impl PlotSeries {
             return Ok(());
         }
         let mut ws = Workspace::default();
-        let predict =
-            |theta: &[f64], ws: &mut Workspace| d.structure.predict_chunk(theta, &self.samples, ws);
-        let full = predict(&d.theta, &mut ws)?;
+        // One assembly serves every θ: the final model's and each with an effect removed.
+        let full = d
+            .structure
+            .predict_chunk(&d.theta, &self.samples, &mut ws)?;
         let mut effects = Vec::new();
         for effect in &d.effects_added {
             let mut theta = d.theta.clone();
@@ -77,7 +78,7 @@ impl PlotSeries {
                     theta[j] = 0.0;
                 }
             }
-            let without = predict(&theta, &mut ws)?;
+            let without = d.structure.predict_assembled(&theta, &self.samples, &ws);
             let share = |a: usize| {
                 let load: f64 = full[a]
                     .iter()
