@@ -4,10 +4,10 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::FitArgs;
+use crate::progress_bar::with_progress;
 use mrsysid::io;
 use mrsysid::report::plots::{
     self, AxisSeries, EffectResidual, FoldR2, NormalProbability, ResidualDensity,
@@ -15,8 +15,8 @@ use mrsysid::report::plots::{
 use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
 use mrsysid::{
-    Axis, FitOutcome, Identification, IdentifiedModel, Mapping, ResidualDiagnostics, Validation,
-    Vehicle, same_file, write_atomically,
+    Axis, FitOutcome, IdentifiedModel, Mapping, ResidualDiagnostics, Validation, Vehicle,
+    same_file, write_atomically,
 };
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -175,7 +175,8 @@ pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
         })?;
     }
     let job = cmd.identification(vehicle, load_mapping(cmd.model.mapping.as_deref())?);
-    let results = with_progress(job, cmd.quiet, |job| job.run())?;
+    let (results, finished) = with_progress(job, cmd.quiet, |job| job.run());
+    let results = results?;
     let report = results.report();
     if !cmd.quiet {
         print_reader_notes(results.outcome());
@@ -197,50 +198,10 @@ pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
     if let Some(dir) = &cmd.plots {
         write_plots(dir, results.outcome()).map_err(|e| Failure::input(e.to_string()))?;
     }
-    Ok(())
-}
-
-/// Runs `job`, showing a spinner with the samples read on stderr once it has taken more
-/// than a second (not with `--quiet`, nor when stderr is not a terminal).
-fn with_progress<T>(
-    request: Identification,
-    quiet: bool,
-    job: impl FnOnce(&Identification) -> T,
-) -> T {
-    use std::io::IsTerminal;
-    if quiet || !std::io::stderr().is_terminal() {
-        return job(&request);
+    if !cmd.quiet {
+        print_err(&finished.line(cmd.logs.len() + cmd.validate.len()));
     }
-    let count = Arc::new(AtomicU64::new(0));
-    let request = request.progress(count.clone());
-    let done = Arc::new(AtomicBool::new(false));
-    let display = {
-        let (count, done) = (count.clone(), done.clone());
-        std::thread::spawn(move || {
-            let start = std::time::Instant::now();
-            let bar = indicatif::ProgressBar::hidden();
-            while !done.load(Ordering::Relaxed) {
-                if start.elapsed() > std::time::Duration::from_secs(1) && bar.is_hidden() {
-                    bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-                    bar.set_style(
-                        indicatif::ProgressStyle::with_template("{spinner} {elapsed} {msg}")
-                            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-                    );
-                }
-                bar.set_message(format!(
-                    "{} samples read (two passes a fit)",
-                    count.load(Ordering::Relaxed)
-                ));
-                bar.tick();
-                std::thread::sleep(std::time::Duration::from_millis(100));
-            }
-            bar.finish_and_clear();
-        })
-    };
-    let result = job(&request);
-    done.store(true, Ordering::Relaxed);
-    let _ = display.join();
-    result
+    Ok(())
 }
 
 fn print_reader_notes(out: &FitOutcome) {

@@ -49,7 +49,7 @@
 //! ```
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64};
+use std::sync::atomic::AtomicBool;
 
 use nalgebra::DMatrix;
 
@@ -61,6 +61,7 @@ use crate::io::{IoError, Mapping, ReadOptions};
 use crate::loads_scan::LowPassScan;
 use crate::model::{ModelOptions, ModelStructure, Workspace};
 use crate::pipeline::{self, FitOutcome, FitRequest, Holdout};
+use crate::progress::Progress;
 use crate::report::summary::Report;
 use crate::report::tables;
 use crate::sample::{Axis, Sample, SampleChunk};
@@ -236,9 +237,11 @@ impl Identification {
         self
     }
 
-    /// A counter of the samples read so far (both passes), for a progress display.
-    pub fn progress(mut self, counter: Arc<AtomicU64>) -> Self {
-        self.request.progress = Some(counter);
+    /// Where `run` says what it has done so far, for a progress display on another
+    /// thread: the phase under way, bytes of the first pass and samples of the later
+    /// passes done of their total.
+    pub fn progress(mut self, progress: Arc<Progress>) -> Self {
+        self.request.progress = Some(progress);
         self
     }
 
@@ -279,6 +282,9 @@ impl Identification {
             let outcome = if request.validate.is_empty() {
                 kept_fit
             } else {
+                if let Some(p) = &request.progress {
+                    p.start_scan_fit(scan.chosen_hz);
+                }
                 pipeline::run(&request)?
             };
             (Some(scan), outcome)

@@ -70,6 +70,7 @@ mod mixing;
 mod model;
 mod on_logs;
 mod pipeline;
+mod progress;
 pub mod report;
 mod rotor;
 mod sample;
@@ -94,6 +95,7 @@ pub use model::{
 };
 pub use on_logs::Validation;
 pub use pipeline::{EffectSeries, FitOutcome, Holdout, PlotSeries};
+pub use progress::{Phase, Progress};
 pub use report::summary::Report;
 pub use sample::{Axis, CHUNK_SAMPLES, Sample, SampleChunk, TRIM_BANDS_HZ};
 pub use source::{LogSource, MemoryLog};

@@ -82,6 +82,9 @@ pub(crate) fn scan(req: &FitRequest) -> Result<(LowPassScan, FitOutcome), Error>
     }
     let mut run = |cutoff_hz: Option<f64>| -> Result<(ScanPoint, FitOutcome), Error> {
         trial.loads_low_pass_hz = cutoff_hz;
+        if let Some(p) = &trial.progress {
+            p.start_scan_fit(cutoff_hz);
+        }
         let outcome = pipeline::run(&trial)?;
         let held_out = held_out_metrics(&outcome);
         let point = ScanPoint {

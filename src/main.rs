@@ -1,6 +1,7 @@
 //! The `mrsysid` command-line tool: a thin shell over the library.
 
 mod commands;
+mod progress_bar;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -33,6 +33,8 @@ pub trait TopicSource {
     fn dropouts(&self) -> &[Dropout] {
         &[]
     }
+    /// Bytes of the file read so far ([`RowSource::bytes_read`]).
+    fn bytes_read(&self) -> u64;
 }
 
 impl<S: TopicSource> RowSource for S {
@@ -70,6 +72,10 @@ impl<S: TopicSource> RowSource for S {
 
     fn dropouts(&self) -> &[Dropout] {
         TopicSource::dropouts(self)
+    }
+
+    fn bytes_read(&self) -> u64 {
+        TopicSource::bytes_read(self)
     }
 }
 

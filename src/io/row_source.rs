@@ -20,4 +20,8 @@ pub(crate) trait RowSource {
     fn dropouts(&self) -> &[Dropout] {
         &[]
     }
+    /// Bytes of the file read so far (compressed bytes of a compressed file), for
+    /// progress: may run ahead of the rows returned, and may end below the file's size
+    /// when parts of the file are skipped.
+    fn bytes_read(&self) -> u64;
 }

@@ -3,7 +3,7 @@
 //! Ω̇, progress counted, and the slow rotor thrusts of a diagnosis or a trim-moment model
 //! filled in.
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use super::FitRequest;
 use super::request::check_cancel;
@@ -12,6 +12,7 @@ use crate::error::Error;
 use crate::identified::IdentifiedModel;
 use crate::io::{self, DeriveOptions, Mapping, ReadOptions};
 use crate::io::{JerkScratch, rotor_jerk};
+use crate::progress::Progress;
 use crate::sample::SampleChunk;
 use crate::slow::SlowThrust;
 
@@ -30,7 +31,7 @@ pub(super) struct Feed<'p, C> {
 /// The Feed's stages after the consistent filter.
 struct AfterFilter<'p, C> {
     derive: DeriveOptions,
-    progress: Option<&'p AtomicU64>,
+    progress: Option<&'p Progress>,
     /// Set by the caller to stop the fit.
     cancel: Option<&'p AtomicBool>,
     jerk: JerkScratch,
@@ -119,12 +120,12 @@ impl<C: FnMut(&SampleChunk) -> Result<(), Error>> AfterFilter<'_, C> {
 
 /// Counts `chunk` in `progress` and hands it to `consume`.
 fn deliver<C: FnMut(&SampleChunk) -> Result<(), Error>>(
-    progress: Option<&AtomicU64>,
+    progress: Option<&Progress>,
     consume: &mut C,
     chunk: &SampleChunk,
 ) -> Result<(), Error> {
     if let Some(p) = progress {
-        p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
+        p.add_samples(chunk.len() as u64);
     }
     consume(chunk)
 }

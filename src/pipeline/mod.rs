@@ -24,6 +24,7 @@ use crate::diagnose::{SCREENING_SAMPLES, Thinned};
 use crate::error::{Error, RequestError};
 use crate::estimate;
 use crate::io::Summary;
+use crate::progress::Phase;
 use crate::source::LogSource;
 use crate::spill::Spill;
 use crate::stats::{AccumulateError, Accumulator};
@@ -64,10 +65,22 @@ fn accumulate_error(source: &LogSource) -> impl Fn(AccumulateError) -> Error + '
     }
 }
 
+/// The units of the first pass over `jobs`: the bytes of each log file, the samples of
+/// each log in memory ([`Progress::done`](crate::Progress::done)).
+fn first_pass_size(jobs: &[(LogSource, split::Role)]) -> u64 {
+    jobs.iter()
+        .map(|(source, _)| match source {
+            LogSource::File(path) => std::fs::metadata(path).map_or(0, |m| m.len()),
+            LogSource::Memory(log) => log.len(),
+        })
+        .sum()
+}
+
 /// Runs the pipeline.
 pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     check(req)?;
     let jobs = jobs(req);
+    req.enter(Phase::Reading, first_pass_size(&jobs));
     let mut per_log = run_jobs(&jobs, req, |_, path, role, share| {
         read_log(path, role, req, share)
     })?;
@@ -120,6 +133,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     let (folds, fit_stats) = arrange(req, &req.structure, plan.as_ref(), &parts)?;
     let (summaries, spills): (Vec<Summary>, Vec<Option<Spill>>) =
         per_log.into_iter().map(|s| (s.summary, s.spill)).unzip();
+    req.enter(Phase::Fitting, 0);
     let fit = estimate::fit(&req.structure, &fit_stats, &req.fit)?;
     let cv = estimate::cross_validate(&req.structure, &folds, &req.fit)?;
     let (validation, validation_samples) = if validation_stats.count() > 0 {

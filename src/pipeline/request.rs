@@ -2,13 +2,14 @@
 //! checks that refuse a request before any log is read.
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::diagnose::DiagnoseOptions;
 use crate::error::{Error, RequestError};
 use crate::estimate::FitOptions;
 use crate::io::{Mapping, ReadOptions};
 use crate::model::ModelStructure;
+use crate::progress::{Phase, Progress};
 use crate::source::LogSource;
 use crate::vehicle::Vehicle;
 
@@ -73,8 +74,8 @@ pub struct FitRequest {
     pub second_pass: bool,
     /// Run the closing-the-loop diagnosis (in the second pass).
     pub diagnose: Option<DiagnoseOptions>,
-    /// Samples read so far, over both passes, for a progress display.
-    pub progress: Option<Arc<AtomicU64>>,
+    /// What the fit has done so far, for a progress display.
+    pub progress: Option<Arc<Progress>>,
     /// Set by the caller to stop the fit: checked before every chunk of every pass
     /// (where `progress` is counted), the fit then ends with
     /// [`RequestError::Cancelled`].
@@ -96,6 +97,15 @@ impl FitRequest {
                 .and_then(|m| m.loads)
                 .map(|l| l.low_pass_hz)
         })
+    }
+}
+
+impl FitRequest {
+    /// Enters `phase` of `total` units in the request's progress, if any.
+    pub(super) fn enter(&self, phase: Phase, total: u64) {
+        if let Some(p) = &self.progress {
+            p.start(phase, total);
+        }
     }
 }
 

@@ -4,8 +4,6 @@
 //! every candidate effect, which it hands to the diagnosis with the folds of the first
 //! pass.
 
-use std::sync::atomic::Ordering;
-
 use super::first_pass::LogCounts;
 use super::folds::{arrange, local_folds, merge};
 use super::pass_share::{Extended, LogPass, PassContext, Start};
@@ -22,6 +20,7 @@ use crate::diagnose::{
 };
 use crate::error::Error;
 use crate::estimate::{DiagnosticOptions, Fit, ResidualDiagnostics, ResidualPass};
+use crate::progress::Phase;
 use crate::sample::{SampleChunk, Signals};
 use crate::source::LogSource;
 use crate::spill::Spill;
@@ -31,7 +30,7 @@ use crate::stats::{Accumulator, stored_columns_of};
 pub(super) fn count_progress(req: &FitRequest, chunk: &SampleChunk) -> Result<(), Error> {
     check_cancel(req.cancel.as_deref())?;
     if let Some(p) = &req.progress {
-        p.fetch_add(chunk.len() as u64, Ordering::Relaxed);
+        p.add_samples(chunk.len() as u64);
     }
     Ok(())
 }
@@ -89,6 +88,9 @@ pub(super) fn second_pass(
     out: &mut FitOutcome,
 ) -> Result<(), Error> {
     let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
+    if req.diagnose.is_some() {
+        req.enter(Phase::Screening, 0);
+    }
     let plan = counts.iter().find_map(|c| c.plan.as_ref());
     let ctx = PassContext {
         req,
@@ -106,6 +108,10 @@ pub(super) fn second_pass(
         plan,
         strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.kinds[k]).sum())),
     };
+    req.enter(
+        Phase::SecondPass,
+        counts.iter().map(|c| c.kinds[0] + c.kinds[1]).sum(),
+    );
     // Samples of each kind before each log: its first sample's place in the decimation.
     let starts: Vec<[u64; 2]> = counts
         .iter()
@@ -193,8 +199,10 @@ pub(super) fn second_pass(
         report: (report.count() > 0).then_some(&report),
         local: &local,
     };
+    req.enter(Phase::Diagnosis, 0);
     let mut diagnosis = diagnose_on_threads(&stats, &req.fit, &options, req.threads)?;
     if counts[..n_fit].iter().all(|c| c.time_series) {
+        req.enter(Phase::Remainder, 0);
         diagnosis.remainder = remainder(req, jobs, spills, &diagnosis)?;
     }
     for series in [&mut out.fit_series, &mut out.validation_series] {

@@ -7,6 +7,7 @@ use super::FitRequest;
 use super::feed::Feed;
 use crate::error::{Error, RequestError};
 use crate::io::{self, LogReader, ReadOptions, Summary};
+use crate::progress::Progress;
 use crate::sample::{CHUNK_SAMPLES, SampleChunk};
 use crate::source::LogSource;
 
@@ -67,6 +68,9 @@ pub(super) fn stream_log(
             let mut cut = Rechunker::default();
             for chunk in log.chunks() {
                 cut.push(chunk, &mut |c| feed.push(c))?;
+                if let Some(p) = &req.progress {
+                    p.add_read(chunk.len() as u64, false);
+                }
             }
             cut.finish(&mut |c| feed.push(c))?;
             feed.finish()?;
@@ -75,11 +79,14 @@ pub(super) fn stream_log(
     };
     if share < 2 {
         let mut reader = open(path, req, 0)?;
+        let mut bytes = BytesRead::new(req);
         reader.join_segments();
         while let Some(chunk) = reader.next_chunk_mut() {
             feed.push(chunk?)?;
+            bytes.count(&reader);
         }
         feed.finish()?;
+        bytes.finish(path);
         return Ok(reader.summary().clone());
     }
     let (tx, rx) = std::sync::mpsc::sync_channel(CHUNKS_IN_FLIGHT);
@@ -88,6 +95,7 @@ pub(super) fn stream_log(
         // The reader is opened on its own thread (it is not `Send`).
         let producer = scope.spawn(move || -> Result<Summary, Error> {
             let mut reader = open(path, req, parse_threads(share))?;
+            let mut bytes = BytesRead::new(req);
             reader.join_segments();
             while let Some(chunk) = reader.next_chunk_mut() {
                 let sent = match chunk {
@@ -98,12 +106,14 @@ pub(super) fn stream_log(
                     }
                     Err(e) => tx.send(Err(e)),
                 };
+                bytes.count(&reader);
                 // The consumer stopped on an error of its own, which it reports. (After
                 // a read error the reader is over: the loop ends with it.)
                 if sent.is_err() {
                     break;
                 }
             }
+            bytes.finish(path);
             Ok(reader.summary().clone())
         });
         let mut consumed = Ok(());
@@ -127,6 +137,40 @@ pub(super) fn stream_log(
             .and(summary)
             .and_then(|s| feed.finish().map(|()| s))
     })
+}
+
+/// The bytes a log file's reader has read, counted in the request's progress as they
+/// grow (once a chunk), the rest of the file once the reader is done.
+struct BytesRead<'p> {
+    progress: Option<&'p Progress>,
+    counted: u64,
+}
+
+impl<'p> BytesRead<'p> {
+    fn new(req: &'p FitRequest) -> Self {
+        Self {
+            progress: req.progress.as_deref(),
+            counted: 0,
+        }
+    }
+
+    /// Counts what `reader` has read since the last call.
+    fn count(&mut self, reader: &LogReader) {
+        if let Some(p) = self.progress {
+            let now = reader.bytes_read();
+            p.add_read(now.saturating_sub(self.counted), true);
+            self.counted = self.counted.max(now);
+        }
+    }
+
+    /// Counts the rest of the file at `path` (a reader may skip parts of it).
+    fn finish(&mut self, path: &std::path::Path) {
+        if let Some(p) = self.progress {
+            let size = std::fs::metadata(path).map_or(0, |m| m.len());
+            p.add_read(size.saturating_sub(self.counted), true);
+            self.counted = self.counted.max(size);
+        }
+    }
 }
 
 /// Re-cuts the chunks of a log in memory (across segment boundaries) into chunks of exactly

@@ -281,6 +281,13 @@ impl CsvSource {
 }
 
 impl RowSource for CsvSource {
+    fn bytes_read(&self) -> u64 {
+        match &self.cutter.gzip {
+            Some(gzip) => gzip.consumed.load(std::sync::atomic::Ordering::Relaxed),
+            None => self.cutter.text_read,
+        }
+    }
+
     fn next_row(&mut self, raw: &mut [f64]) -> Result<Option<(Location, Option<f64>)>, IoError> {
         while self.row == self.current.lines.len() {
             if !self.next_range()? {

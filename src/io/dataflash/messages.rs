@@ -47,6 +47,11 @@ impl MessageReader {
         })
     }
 
+    /// Bytes of the file read so far.
+    pub(super) fn position(&self) -> u64 {
+        self.pos
+    }
+
     pub(super) fn err(&self, offset: u64, text: String) -> IoError {
         IoError::new(
             &self.file,

@@ -196,4 +196,8 @@ impl TopicSource for DataflashSource {
             ErrorKind::MissingSignal(text),
         ))
     }
+
+    fn bytes_read(&self) -> u64 {
+        self.reader.position()
+    }
 }

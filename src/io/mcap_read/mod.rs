@@ -70,6 +70,9 @@ pub struct McapSource {
     file_topics: BTreeSet<String>,
     align: Aligner,
     message_index: u64,
+    /// Bytes of records read from the file (the indexed reader reads only the chunks of
+    /// mapped topics).
+    bytes_read: u64,
 }
 
 impl McapSource {
@@ -174,6 +177,7 @@ impl McapSource {
             file_topics: BTreeSet::new(),
             align: Aligner::new(file, slots, base, max_gap),
             message_index: 0,
+            bytes_read: 0,
         };
         if let Some(summary) = summary {
             for (id, schema) in &summary.schemas {
@@ -385,5 +389,9 @@ impl TopicSource for McapSource {
             field(&t.name),
             ErrorKind::MissingSignal(format!("topic not in the file ({has})")),
         ))
+    }
+
+    fn bytes_read(&self) -> u64 {
+        self.bytes_read
     }
 }

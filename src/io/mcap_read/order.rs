@@ -126,6 +126,7 @@ impl McapSource {
                     if let Err(e) = read {
                         return Err(self.read_error(e));
                     }
+                    self.bytes_read += length as u64;
                     if let Err(e) = reader.insert_chunk_record_data(offset, buffer) {
                         let index = self.message_index;
                         return Err(self.err(
@@ -178,7 +179,10 @@ impl McapSource {
             let (opcode, data) = match event {
                 LinearReadEvent::ReadRequest(need) => {
                     match self.handle.read(reader.insert(need)) {
-                        Ok(n) => reader.notify_read(n),
+                        Ok(n) => {
+                            reader.notify_read(n);
+                            self.bytes_read += n as u64;
+                        }
                         Err(e) => return Err(self.read_error(e)),
                     }
                     continue;

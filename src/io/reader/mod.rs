@@ -129,6 +129,13 @@ impl LogReader {
         self.out.last_segment
     }
 
+    /// Bytes of the file read so far (compressed bytes of a compressed file), for
+    /// progress: may run ahead of the samples returned, and end below the file's size
+    /// when the reader skips parts of it (MCAP chunks of unmapped topics).
+    pub fn bytes_read(&self) -> u64 {
+        self.source.bytes_read()
+    }
+
     /// The summary so far; complete once the iterator returned `None`.
     pub fn summary(&self) -> &Summary {
         &self.tally.summary

@@ -302,4 +302,8 @@ impl TopicSource for UlogSource {
     fn dropouts(&self) -> &[Dropout] {
         &self.dropouts
     }
+
+    fn bytes_read(&self) -> u64 {
+        self.reader.position()
+    }
 }
