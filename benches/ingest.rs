@@ -3,7 +3,12 @@
 //! three topics) through `open_log` against bare message iteration with the `mcap`
 //! crate's linear reader, without and with decoding every message (serde_json for JSON,
 //! the crate's ros2msg/CDR decoder for CDR: the decoders `open_log` uses). The CSV and
-//! bare MCAP baselines read the same bytes without parsing numbers.
+//! bare MCAP baselines read the same bytes without parsing numbers. A 100 k-sample PX4
+//! ULog and a 100 k-sample ArduPilot DataFlash log (both written by the crate's test
+//! writers: ULog with a state topic and two rotor-topic instances; DataFlash with two
+//! IMU instances a sample, the EKF and ESC telemetry at every second) through
+//! `open_log` against a bare scan of their messages: each message's header read and its
+//! bytes read past through the same 64 KiB buffering, no field decoded.
 //!
 //! `cargo bench --bench ingest -- --warm-up-time 1 --measurement-time 3`
 
@@ -15,13 +20,15 @@ use std::path::{Path, PathBuf};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
 use mrsysid::SampleChunk;
+use mrsysid::io::fixtures::dataflash::write_flight;
 use mrsysid::io::fixtures::mcap::{Encoding, write_samples, written_mapping};
-use mrsysid::io::fixtures::write_contract_csv;
+use mrsysid::io::fixtures::{ulog, write_contract_csv};
 use mrsysid::io::{ReadOptions, open_log};
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
 
 const CSV_ROWS: usize = 1_000_000;
 const MCAP_SAMPLES: usize = 100_000;
+const FLIGHT_LOG_SAMPLES: usize = 100_000;
 
 fn vehicle() -> Vehicle {
     let props = MassAndRotorProperties {
@@ -137,6 +144,64 @@ fn decoded_mcap(path: &Path) -> usize {
     fields
 }
 
+/// A buffered reader of the file at `path`, with the readers' 64 KiB buffer.
+fn buffered(path: &Path) -> std::io::BufReader<std::fs::File> {
+    std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(path).expect("opens"))
+}
+
+/// Bare ULog scan: the 16-byte file header, then every message's 3-byte header (size,
+/// type) and its payload read past; the number of data (`D`) messages.
+fn bare_ulog(path: &Path) -> usize {
+    let mut r = buffered(path);
+    let mut header = [0u8; 16];
+    r.read_exact(&mut header).expect("header");
+    let (mut payload, mut data) = (Vec::with_capacity(1 << 16), 0);
+    let mut h = [0u8; 3];
+    while r.read_exact(&mut h).is_ok() {
+        let size = u16::from_le_bytes([h[0], h[1]]) as usize;
+        payload.resize(size, 0);
+        r.read_exact(&mut payload).expect("payload");
+        data += usize::from(h[2] == b'D');
+    }
+    data
+}
+
+/// Bare DataFlash scan: every message's 3-byte head (0xA3 0x95, type) and its body read
+/// past, with each type's length taken from its `FMT` message (type 128, 89 bytes; the
+/// defined type and its length are its first two body bytes); the number of messages.
+fn bare_dataflash(path: &Path) -> usize {
+    let mut r = buffered(path);
+    let mut length = [0usize; 256];
+    length[128] = 89;
+    let (mut body, mut messages) = (Vec::with_capacity(256), 0);
+    let mut h = [0u8; 3];
+    while r.read_exact(&mut h).is_ok() {
+        assert_eq!(h[..2], [0xA3, 0x95], "message head");
+        body.resize(length[h[2] as usize] - 3, 0);
+        r.read_exact(&mut body).expect("body");
+        if h[2] == 128 {
+            length[body[0] as usize] = body[1] as usize;
+        }
+        messages += 1;
+    }
+    messages
+}
+
+/// Reads the flight log at `path` both ways in one benchmark group.
+fn flight_log_group(c: &mut Criterion, name: &str, path: &Path, open: impl Fn() -> usize) {
+    let bare = if name.starts_with("ulog") {
+        bare_ulog
+    } else {
+        bare_dataflash
+    };
+    let mut g = c.benchmark_group(name);
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(FLIGHT_LOG_SAMPLES as u64));
+    g.bench_function("bare_scan", |b| b.iter(|| black_box(bare(path))));
+    g.bench_function("open_log", |b| b.iter(|| black_box(open())));
+    g.finish();
+}
+
 fn bench(c: &mut Criterion) {
     let v = vehicle();
     let csv_path = file("1m.csv");
@@ -174,6 +239,33 @@ fn bench(c: &mut Criterion) {
         });
         g.finish();
     }
+
+    let path = file("100k.ulg");
+    if !path.exists() {
+        let all: Vec<SampleChunk> = chunks(FLIGHT_LOG_SAMPLES).collect();
+        ulog::write_samples(&path, &all).expect("writes");
+    }
+    let mapping = ulog::written_mapping(4, false, false, false);
+    flight_log_group(c, "ulog_100k", &path, || ingest(&path, &v, Some(&mapping)));
+
+    let path = file("100k.bin");
+    if !path.exists() {
+        let mut all = SampleChunk::with_capacity(4, FLIGHT_LOG_SAMPLES, false);
+        for chunk in chunks(FLIGHT_LOG_SAMPLES) {
+            all.extend_from(&chunk, 0..chunk.len());
+        }
+        // Level flight: the identity attitude, and specific force = wrench / mass.
+        all.attitude = [1.0, 0.0, 0.0, 0.0].map(|q| vec![q; FLIGHT_LOG_SAMPLES]);
+        let sf = [0, 1, 2].map(|a| all.wrench[a].iter().map(|f| f / 1.2).collect());
+        std::fs::write(&path, write_flight(&all, &sf, &[], None, 2)).expect("writes");
+    }
+    let mapping = mrsysid::io::Mapping::from_toml_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/ardupilot.toml"),
+    )
+    .expect("example mapping");
+    flight_log_group(c, "dataflash_100k", &path, || {
+        ingest(&path, &v, Some(&mapping))
+    });
 }
 
 // Plots off: the crate enables plotters' bundled-font backend (`ab_glyph`), under which
