@@ -31,7 +31,7 @@ impl Failure {
         Self { code: 2, message }
     }
 
-    fn fit(message: String) -> Self {
+    pub fn fit(message: String) -> Self {
         Self { code: 1, message }
     }
 }
@@ -125,13 +125,13 @@ const PLOT_STEMS: [&str; 6] = [
     "added_effects",
 ];
 
-fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
+pub fn load_mapping(path: Option<&Path>) -> Result<Option<Mapping>, Failure> {
     Ok(path.map(Mapping::from_toml_file).transpose()?)
 }
 
 /// The outputs of `fit` (for [`check_outputs`]): the JSON report, the model file, the
 /// plot directory and the plot files in it.
-fn fit_outputs(cmd: &FitArgs) -> Vec<(&'static str, PathBuf)> {
+pub fn fit_outputs(cmd: &FitArgs) -> Vec<(&'static str, PathBuf)> {
     let mut out = Vec::new();
     out.extend(cmd.json.iter().map(|p| ("--json", p.clone())));
     out.extend(cmd.model_out.iter().map(|p| ("--model-out", p.clone())));
@@ -148,6 +148,9 @@ fn fit_outputs(cmd: &FitArgs) -> Vec<(&'static str, PathBuf)> {
 
 /// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
 pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
+    if cmd.from_stats {
+        return crate::stats_commands::fit_from_stats(cmd, diagnosis_only);
+    }
     let outputs = fit_outputs(cmd);
     let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
     let mut inputs: Vec<(&str, &Path)> = vec![("vehicle file", cmd.model.vehicle.as_path())];
@@ -199,7 +202,7 @@ pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
         write_plots(dir, results.outcome()).map_err(|e| Failure::input(e.to_string()))?;
     }
     if !cmd.quiet {
-        print_err(&finished.line(cmd.logs.len() + cmd.validate.len()));
+        print_err(&finished.line("fit", cmd.logs.len() + cmd.validate.len()));
     }
     Ok(())
 }

@@ -43,6 +43,9 @@ pub enum Error {
     /// The request itself cannot be carried out.
     #[error(transparent)]
     Request(#[from] RequestError),
+    /// A statistics file or part cannot be read, merged or fitted.
+    #[error(transparent)]
+    Stats(#[from] StatsError),
     /// The temporary file holding a log's parsed samples between the two passes could
     /// not be written or read back (e.g. the temp dir is full or not writable).
     #[error("temporary sample file {}: {source}", path.display())]
@@ -67,6 +70,54 @@ impl Error {
             _ => 2,
         }
     }
+}
+
+/// A statistics part ([`crate::StatsPart`]) that cannot be read, merged or fitted.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StatsError {
+    /// The file could not be read or written.
+    #[error("{file}: {what}")]
+    Io {
+        /// The file.
+        file: String,
+        /// What went wrong.
+        what: String,
+    },
+    /// The file is not a statistics file of this version, or is corrupted.
+    #[error("{file}: {what}")]
+    Format {
+        /// The file.
+        file: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// The part was made with other settings (vehicle, model options, mapping, reading
+    /// options, consistent filter) than the request or the part it is merged with.
+    #[error(
+        "statistics of {logs} were made with other settings than this fit's: accumulate them again with the fit's vehicle, mapping and options\n  part:    {part}\n  this fit: {request}"
+    )]
+    OtherSettings {
+        /// The part's logs.
+        logs: String,
+        /// The part's settings.
+        part: String,
+        /// The request's (or the other part's) settings.
+        request: String,
+    },
+    /// The same log in two parts.
+    #[error("{log} is in two statistics parts: a log may be fitted or validated once")]
+    DuplicateLog {
+        /// The log.
+        log: String,
+    },
+    /// Fewer than two fit logs: leave one log out needs two.
+    #[error(
+        "a fit from statistics needs at least two fit logs (each is a fold of leave one log out), got {logs}; fit a single log directly"
+    )]
+    TooFewLogs {
+        /// Fit logs given.
+        logs: usize,
+    },
 }
 
 /// A fit request that cannot be carried out as given.

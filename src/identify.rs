@@ -60,7 +60,7 @@ use crate::identified::IdentifiedModel;
 use crate::io::{IoError, Mapping, ReadOptions};
 use crate::loads_scan::LowPassScan;
 use crate::model::{ModelOptions, ModelStructure, Workspace};
-use crate::pipeline::{self, FitOutcome, FitRequest, Holdout};
+use crate::pipeline::{self, FitOutcome, FitRequest, Holdout, StatsPart};
 use crate::progress::Progress;
 use crate::report::summary::Report;
 use crate::report::tables;
@@ -253,6 +253,40 @@ impl Identification {
     pub fn cancel(mut self, flag: Arc<AtomicBool>) -> Self {
         self.request.cancel = Some(flag);
         self
+    }
+
+    /// Reads the fit logs (not the validation logs) and returns each one's first pass as
+    /// statistics: a part that can be saved, sent, merged with the parts of other logs
+    /// made with the same settings, and fitted by [`Identification::run_from_stats`]
+    /// (statistics as data: one task per log, a merge, one fit). Logs are checked as
+    /// [`Identification::run`] checks them.
+    pub fn accumulate(&self) -> Result<StatsPart, Error> {
+        if let Some(e) = &self.bad_samples {
+            return Err(e.clone().into());
+        }
+        pipeline::accumulate(&self.request)
+    }
+
+    /// Fits the logs of `fit` (at least two; leave-one-log-out cross-validation) and
+    /// reports on those of `validate`, from their statistics alone: the result equals
+    /// [`Identification::run`] on the same logs with [`Identification::residual_pass`]
+    /// off and without the diagnosis, which need the samples again. The builder's logs
+    /// are ignored; its vehicle, mapping and options must be those the parts were made
+    /// with ([`crate::StatsError::OtherSettings`] otherwise), and an estimated cut-off
+    /// is not available (declare it).
+    pub fn run_from_stats(
+        &self,
+        fit: &StatsPart,
+        validate: Option<&StatsPart>,
+    ) -> Result<Results, Error> {
+        let outcome = pipeline::run_from_parts(&self.request, fit, validate)?;
+        Ok(Results {
+            vehicle: self.request.vehicle.clone(),
+            base: self.request.structure.clone(),
+            outcome,
+            loads_low_pass_hz: self.request.effective_loads_low_pass(),
+            loads_low_pass_scan: None,
+        })
     }
 
     /// The request as built.

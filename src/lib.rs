@@ -83,7 +83,7 @@ mod stats;
 mod util;
 pub mod vehicle;
 
-pub use error::{Error, RequestError};
+pub use error::{Error, RequestError, StatsError};
 pub use estimate::{AxisMetrics, ResidualDiagnostics};
 pub use identified::{IdentifiedModel, ModelFileError};
 pub use identify::{Identification, InformationCriteria, ParameterResult, Results};
@@ -94,7 +94,9 @@ pub use model::{
     InflowCorrection, ModelError, ModelOptions, ModelStructure, RotorInertiaTerms, Workspace,
 };
 pub use on_logs::Validation;
-pub use pipeline::{EffectSeries, FitOutcome, Holdout, PlotSeries};
+pub use pipeline::{
+    EffectSeries, FitOutcome, Holdout, PlotSeries, STATS_FORMAT_VERSION, StatsPart,
+};
 pub use progress::{Phase, Progress};
 pub use report::summary::Report;
 pub use sample::{Axis, CHUNK_SAMPLES, Sample, SampleChunk, TRIM_BANDS_HZ};

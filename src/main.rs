@@ -2,6 +2,7 @@
 
 mod commands;
 mod progress_bar;
+mod stats_commands;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -31,6 +32,10 @@ enum Command {
     Fit(FitArgs),
     /// Like `fit`, but print only the closing-the-loop diagnosis.
     Diagnose(FitArgs),
+    /// Read logs once and write their first-pass statistics to a file, for
+    /// `fit --from-stats` (statistics as data: one task per log or group of logs, on any
+    /// machine or engine, then one fit).
+    Accumulate(AccumulateArgs),
     /// Predict force and moment per sample of a log with a saved model (CSV out).
     Predict(PredictArgs),
     /// NRMSE, TIC and R² of a saved model on logs it was not fitted to.
@@ -139,6 +144,33 @@ struct FitArgs {
     /// Skip the residual diagnosis (closing the loop).
     #[arg(long)]
     no_diagnose: bool,
+    /// The logs (and `--validate` logs) are statistics files written by `mrsysid
+    /// accumulate` with the same vehicle, mapping and options: the Eq. 22 fit with
+    /// leave-one-log-out cross-validation runs on them without reading any log (no
+    /// residual pass, no diagnosis, no plots: they need the samples).
+    #[arg(long)]
+    from_stats: bool,
+}
+
+#[derive(clap::Args)]
+struct AccumulateArgs {
+    /// Logs to read (CSV contract, mapped CSV, MCAP, ULog or DataFlash with --mapping).
+    #[arg(required = true)]
+    logs: Vec<PathBuf>,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// The logs' loads were low-passed at this cut-off (Hz): as `fit --loads-low-pass`.
+    #[arg(long, value_name = "HZ")]
+    loads_low_pass: Option<f64>,
+    /// Threads for reading and accumulating, at least 1 (default: available cores).
+    #[arg(long, value_parser = parse_threads)]
+    threads: Option<usize>,
+    /// The statistics file to write (whole or not at all).
+    #[arg(long, short)]
+    out: PathBuf,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(clap::Args)]
@@ -302,6 +334,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Fit(args) => commands::fit(&args, false),
         Command::Diagnose(args) => commands::fit(&args, true),
+        Command::Accumulate(args) => stats_commands::accumulate(&args),
         Command::Predict(args) => {
             commands::predict(&args.model, &args.log, args.mapping.as_deref(), &args.out)
         }
@@ -351,27 +384,57 @@ fn validate_help() -> String {
     )
 }
 
-impl FitArgs {
-    /// The fit request, the library's builder set straight from the arguments (the
-    /// vehicle and mapping loaded from `--vehicle` and `--mapping`).
+impl ModelArgs {
+    /// The library's builder with the model and reading options of the arguments, for
+    /// `vehicle` and `mapping` (loaded from `--vehicle` and `--mapping`).
     fn identification(&self, vehicle: Vehicle, mapping: Option<Mapping>) -> Identification {
-        let m = &self.model;
-        let mut job = Identification::new(vehicle)
+        let job = Identification::new(vehicle)
             .model_options(ModelOptions {
-                inflow: m.inflow,
-                linear_vh_terms: !m.no_linear_vh,
-                rotor_inertia: m.rotor_inertia,
+                inflow: self.inflow,
+                linear_vh_terms: !self.no_linear_vh,
+                rotor_inertia: self.rotor_inertia,
             })
-            .logs(self.logs.iter().cloned())
             .read_options(ReadOptions {
-                airborne_only: !m.keep_ground,
-                invalid: if m.drop_invalid {
+                airborne_only: !self.keep_ground,
+                invalid: if self.drop_invalid {
                     InvalidSamples::DropAndCount
                 } else {
                     InvalidSamples::Error
                 },
                 ..ReadOptions::default()
-            })
+            });
+        match mapping {
+            Some(mapping) => job.mapping(mapping),
+            None => job,
+        }
+    }
+}
+
+impl AccumulateArgs {
+    /// The builder of the logs' first passes.
+    fn identification(&self, vehicle: Vehicle, mapping: Option<Mapping>) -> Identification {
+        let mut job = self
+            .model
+            .identification(vehicle, mapping)
+            .logs(self.logs.iter().cloned());
+        if let Some(threads) = self.threads {
+            job = job.threads(threads);
+        }
+        if let Some(hz) = self.loads_low_pass {
+            job = job.loads_low_pass(hz);
+        }
+        job
+    }
+}
+
+impl FitArgs {
+    /// The fit request, the library's builder set straight from the arguments (the
+    /// vehicle and mapping loaded from `--vehicle` and `--mapping`).
+    fn identification(&self, vehicle: Vehicle, mapping: Option<Mapping>) -> Identification {
+        let mut job = self
+            .model
+            .identification(vehicle, mapping)
+            .logs(self.logs.iter().cloned())
             .holdout(Holdout {
                 blocks: self.holdout_blocks,
                 guard_seconds: self.holdout_guard,
@@ -379,9 +442,6 @@ impl FitArgs {
             .diagnose(!self.no_diagnose);
         for log in &self.validate {
             job = job.validate(log.clone());
-        }
-        if let Some(mapping) = mapping {
-            job = job.mapping(mapping);
         }
         if let Some(threads) = self.threads {
             job = job.threads(threads);

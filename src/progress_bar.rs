@@ -21,14 +21,14 @@ pub struct Finished {
 impl Finished {
     /// One line: logs, bytes read (by every fit of a cut-off scan), samples passed over
     /// all passes, wall time.
-    pub fn line(&self, logs: usize) -> String {
+    pub fn line(&self, command: &str, logs: usize) -> String {
         let p = &self.progress;
         let fits = match p.scan_fit() {
             Some((n, _)) => format!(" over {n} fits of the cut-off scan"),
             None => String::new(),
         };
         format!(
-            "fit: {logs} log{}, {} read{fits}, {} samples passed, {:.1} s",
+            "{command}: {logs} log{}, {} read{fits}, {} samples passed, {:.1} s",
             if logs == 1 { "" } else { "s" },
             megabytes(p.bytes()),
             p.samples(),

@@ -472,7 +472,7 @@ mod tests {
 
 /// Rotor count and which optional signals (Ω̇, height, attitude) data carry: they decide
 /// which model terms and candidate effects the data can support.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Signals {
     /// Number of rotor speed series.
     pub rotors: usize,

@@ -78,7 +78,7 @@ impl AccumulateError {
 }
 
 /// One-pass, mergeable statistics of [X | Z] for a model structure.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Accumulator {
     p: usize,
     /// For each augmented column j (structure columns, then outputs): its shape index

@@ -980,3 +980,123 @@ fn a_loads_cut_off_must_be_a_positive_frequency() {
     let e = mrsysid::io::Mapping::from_toml_file(&mapping).unwrap_err();
     assert!(e.to_string().contains("loads.low_pass_hz"), "{e}");
 }
+
+/// `mrsysid accumulate` writes each log's first pass to a statistics file, and
+/// `fit --from-stats` fits them without reading a log: the same estimates, σ (white),
+/// fit, cross-validation and validation figures as the direct fit of the logs (whose
+/// residual pass adds the coloured σ and the residual statistics a fit from statistics
+/// cannot have). A corrupted file and an option that needs the samples are refused
+/// (exit 2) naming what is wrong.
+#[test]
+fn a_fit_from_statistics_files_reports_what_the_direct_fit_reports() {
+    let v = ["--vehicle", "data/vehicles/quad_x.toml"];
+    let logs = [
+        "data/quad_x_sweep.csv",
+        "data/quad_x_flight_quadratic_drag.csv",
+    ];
+    let parts = [tmp("sweep.stats"), tmp("flight.stats")];
+    for (log, part) in logs.iter().zip(&parts) {
+        let part = part.to_str().unwrap();
+        let out = mrsysid(&[&["accumulate", log, "-o", part][..], &v].concat());
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let (direct, stats) = (tmp("direct.json"), tmp("from-stats.json"));
+    let (p0, p1) = (parts[0].to_str().unwrap(), parts[1].to_str().unwrap());
+    let out = mrsysid(
+        &[
+            &[
+                "fit",
+                logs[0],
+                logs[1],
+                "--no-diagnose",
+                "--quiet",
+                "--json",
+            ][..],
+            &[direct.to_str().unwrap()],
+            &v,
+        ]
+        .concat(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = mrsysid(
+        &[
+            &["fit", "--from-stats", p0, p1, "--json"][..],
+            &[stats.to_str().unwrap()],
+            &v,
+        ]
+        .concat(),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("fit from statistics: 2 logs, 5001 samples"),
+        "{stderr}"
+    );
+    let (d, s) = (json(&direct), json(&stats));
+    for key in [
+        "samples",
+        "validation_source",
+        "axes",
+        "validation",
+        "cross_validation",
+        "fsoa",
+    ] {
+        assert_eq!(d[key], s[key], "{key}");
+    }
+    let params = |r: &serde_json::Value| -> Vec<(String, f64, f64)> {
+        let ps = r["parameters"].as_array().unwrap();
+        ps.iter()
+            .map(|p| {
+                let name = p["name"].as_str().unwrap().to_string();
+                (
+                    name,
+                    p["estimate"].as_f64().unwrap(),
+                    p["std"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    assert_eq!(params(&d), params(&s));
+    assert!(
+        s["parameters"][0]["std_coloured"].is_null(),
+        "no residual pass"
+    );
+
+    let bad = tmp("corrupted.stats");
+    let mut bytes = std::fs::read(&parts[0]).unwrap();
+    bytes[40] ^= 0xff;
+    std::fs::write(&bad, bytes).unwrap();
+    let out = mrsysid(&[&["fit", "--from-stats", bad.to_str().unwrap(), p1][..], &v].concat());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("corrupted.stats: checksum mismatch"),
+        "{stderr}"
+    );
+    let plots = tmp("stats-plots");
+    let out = mrsysid(
+        &[
+            &[
+                "fit",
+                "--from-stats",
+                p0,
+                p1,
+                "--plots",
+                plots.to_str().unwrap(),
+            ][..],
+            &v,
+        ]
+        .concat(),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--plots needs the samples"), "{stderr}");
+}

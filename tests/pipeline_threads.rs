@@ -238,3 +238,83 @@ fn json_reports_are_identical_for_any_thread_count_and_range_size() {
         );
     }
 }
+
+/// Statistics as data: each log's first pass kept as a part, saved and loaded, merged
+/// in another grouping, and fitted, gives the report of the same logs fitted directly
+/// with the residual pass off and no diagnosis, bit for bit (the same per-log
+/// statistics merged in the same log order). And the parts refuse what would be wrong.
+#[test]
+fn a_fit_from_saved_and_merged_statistics_equals_the_direct_fit() {
+    use mrsysid::{Error, Identification, StatsError, StatsPart};
+    let logs: Vec<PathBuf> = [(0, 900), (900, 1800), (1800, 2400), (2400, 3001)]
+        .iter()
+        .map(|&(a, b)| flight_part(&format!("stats-{a}.csv"), a..b))
+        .collect();
+    let vehicle =
+        Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle");
+    let builder = || Identification::new(vehicle.clone()).threads(2);
+    let direct = builder()
+        .log(logs[0].clone())
+        .log(logs[1].clone())
+        .log(logs[2].clone())
+        .validate(logs[3].clone())
+        .residual_pass(false)
+        .diagnose(false)
+        .run()
+        .expect("direct fit");
+    // One part for the first log, one for the next two; the validation log's own.
+    let dir = scratch::dir("threads");
+    let save_load = |part: StatsPart, name: &str| {
+        let path = dir.join(name);
+        part.save(&path).expect("save");
+        StatsPart::load(&path).expect("load")
+    };
+    let mut fit = save_load(
+        builder().log(logs[0].clone()).accumulate().expect("a"),
+        "a.stats",
+    );
+    let two = builder()
+        .log(logs[1].clone())
+        .log(logs[2].clone())
+        .accumulate();
+    fit.merge(&save_load(two.expect("b"), "b.stats"))
+        .expect("merge");
+    let validation = builder().log(logs[3].clone()).accumulate().expect("v");
+    let from_stats = builder()
+        .run_from_stats(&fit, Some(&validation))
+        .expect("fit from statistics");
+    let json = |r: &mrsysid::Results| serde_json::to_string(&r.report()).expect("json");
+    assert_eq!(json(&from_stats), json(&direct));
+    assert_eq!(fit.samples(), 2400);
+
+    // Corrupted, other settings, the same log twice, a single fit log.
+    let mut bytes = fit.to_bytes();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    let e = StatsPart::from_bytes(&bytes, "x.stats").expect_err("corrupted");
+    assert!(e.to_string().contains("checksum mismatch"), "{e}");
+    let other = Identification::new(vehicle.clone())
+        .loads_low_pass(20.0)
+        .log(logs[3].clone())
+        .accumulate()
+        .expect("other settings");
+    let e = fit.clone().merge(&other).expect_err("other settings");
+    assert!(matches!(e, StatsError::OtherSettings { .. }), "{e}");
+    let e = fit.clone().merge(&fit).expect_err("twice");
+    assert!(matches!(e, StatsError::DuplicateLog { .. }), "{e}");
+    let single = builder().log(logs[0].clone()).accumulate().expect("single");
+    let e = builder()
+        .run_from_stats(&single, None)
+        .expect_err("one log");
+    assert!(
+        matches!(e, Error::Stats(StatsError::TooFewLogs { logs: 1 })),
+        "{e}"
+    );
+    let e = builder()
+        .run_from_stats(&fit, Some(&fit))
+        .expect_err("in-sample");
+    assert!(
+        matches!(e, Error::Stats(StatsError::DuplicateLog { .. })),
+        "{e}"
+    );
+}

@@ -148,7 +148,7 @@ impl NormalEquations {
 }
 
 /// What the data say about the motor layout.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct LayoutReport {
     /// Samples used.
     pub samples: u64,

@@ -11,7 +11,7 @@ const MAX_GAPS: usize = 100;
 const MAX_DROP_MESSAGES: usize = 10;
 
 /// A time gap that split the log.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Gap {
     /// Last time before the gap, s.
     pub from: f64,
@@ -21,7 +21,7 @@ pub struct Gap {
 
 /// A logger dropout recorded in a log (ULog `O` message): data were lost; the reader
 /// never interpolates across it and starts a new segment after it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Dropout {
     /// Byte offset of the dropout message in the file.
     pub offset: u64,
@@ -32,7 +32,7 @@ pub struct Dropout {
 }
 
 /// What happened while reading a log; complete once the reader is exhausted.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Summary {
     /// File name.
     pub file: String,
@@ -99,7 +99,7 @@ impl Summary {
 }
 
 /// What was kept of a log by the airborne detection.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct AirborneSpan {
     /// Flights: runs of airborne samples between ground time.
     pub flights: usize,

@@ -47,7 +47,7 @@ const MIN_RUN_SAMPLES: u64 = 256;
 /// Runs of samples without a break longer than [`RUN_BREAK_SECONDS`], counted from the
 /// samples themselves as the pipeline streams them (so a log gives the same count from a
 /// file and from memory, whatever its reader calls a segment).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(super) struct Runs {
     samples: u64,
     runs: u64,

@@ -35,6 +35,7 @@ mod first_pass;
 mod folds;
 mod log_checks;
 mod outcome;
+mod parts;
 mod pass_share;
 mod remainder;
 mod request;
@@ -46,9 +47,10 @@ mod threads;
 
 pub use feed::stream_for_model;
 pub use outcome::{EffectSeries, FitOutcome, PlotSeries};
+pub use parts::{STATS_FORMAT_VERSION, StatsPart, accumulate, run_from_parts};
 pub use request::{FitRequest, Holdout};
 
-use first_pass::{LogCounts, read_log};
+use first_pass::{LogCounts, LogStats, read_log};
 use folds::{arrange, merge};
 use log_checks::{time_unit_error, too_short};
 use outcome::validation_source;
@@ -81,9 +83,20 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     check(req)?;
     let jobs = jobs(req);
     req.enter(Phase::Reading, first_pass_size(&jobs));
-    let mut per_log = run_jobs(&jobs, req, |_, path, role, share| {
+    let per_log = run_jobs(&jobs, req, |_, path, role, share| {
         read_log(path, role, req, share)
     })?;
+    after_first_pass(req, &jobs, per_log)
+}
+
+/// The pipeline once every log's first pass is done (`per_log`, in the order of
+/// `jobs`): the checks that need the logs read, the fit and its cross-validation, and
+/// the second pass when asked for.
+fn after_first_pass(
+    req: &FitRequest,
+    jobs: &[(LogSource, split::Role)],
+    mut per_log: Vec<LogStats>,
+) -> Result<FitOutcome, Error> {
     time_unit_error(req, &per_log)?;
     let n_fit = req.logs.len();
     let mut validation_stats = Accumulator::new(&req.structure);
@@ -164,7 +177,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     if req.second_pass || req.diagnose.is_some() {
         second_pass(
             req,
-            &jobs,
+            jobs,
             &spills,
             &counts,
             signals,
