@@ -27,6 +27,7 @@ from .errors import (
     MrsysidError,
     RequestError,
     SpillError,
+    StatsError,
     VehicleError,
 )
 
@@ -47,5 +48,6 @@ __all__ = [
     "MrsysidError",
     "RequestError",
     "SpillError",
+    "StatsError",
     "VehicleError",
 ]

@@ -23,6 +23,7 @@ __all__ = [
     "ModelFileError",
     "RequestError",
     "SpillError",
+    "StatsError",
 ]
 
 
@@ -109,3 +110,9 @@ class RequestError(MrsysidError, ValueError):
 class SpillError(MrsysidError):
     """The temporary file holding a log's samples between the two passes could not be
     written or read back (``file`` is that file)."""
+
+
+class StatsError(MrsysidError, ValueError):
+    """A statistics part cannot be read, merged or fitted: not a statistics file or
+    corrupted (``file``), made with other settings, a log in two parts, or fewer than
+    two fit logs."""

@@ -2,7 +2,7 @@
 //! per variant (same names), carrying the message, the exit code `mrsysid` would give,
 //! and where the error happened (file; line, message, byte or sample; field).
 
-use mrsysid::Error;
+use mrsysid::{Error, StatsError};
 use mrsysid::io::{IoError, Location};
 use mrsysid::vehicle::VehicleSource;
 use pyo3::prelude::*;
@@ -63,6 +63,12 @@ fn build(py: Python<'_>, e: &Error) -> PyResult<PyErr> {
         Error::Spill { path, .. } => {
             kw.set_item("file", path.display().to_string())?;
             "SpillError"
+        }
+        Error::Stats(s) => {
+            if let StatsError::Io { file, .. } | StatsError::Format { file, .. } = s {
+                kw.set_item("file", file)?;
+            }
+            "StatsError"
         }
     };
     let class = py.import("mrsysid.errors")?.getattr(class)?;
