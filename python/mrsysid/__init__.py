@@ -17,6 +17,7 @@ a second implementation)::
 from ._mrsysid import CHUNK_SAMPLES, Vehicle, __version__
 from ._fit import fit
 from ._results import Model, Results, load_model
+from ._stats import accumulate, fit_from_stats, merge_stats
 from .errors import (
     AccumulateError,
     DiagnoseError,
@@ -36,6 +37,9 @@ __all__ = [
     "Vehicle",
     "__version__",
     "fit",
+    "accumulate",
+    "merge_stats",
+    "fit_from_stats",
     "Model",
     "Results",
     "load_model",

@@ -87,3 +87,38 @@ def fit(
     residual_pass: bool,
 ) -> Results:
     """Runs the fit with the GIL released; Ctrl-C raises ``KeyboardInterrupt``."""
+
+def accumulate(
+    vehicle: Vehicle,
+    *,
+    logs: List[str],
+    tables: List[Tuple[str, Columns]],
+    mapping: Optional[str],
+    threads: Optional[int],
+    inflow: str,
+    linear_vh: bool,
+    rotor_inertia: str,
+    drop_invalid: bool,
+    loads_low_pass: Optional[float],
+    keep_ground: bool,
+) -> bytes:
+    """The logs' first-pass statistics as the bytes of one statistics part."""
+
+def merge_stats(parts: List[bytes]) -> bytes:
+    """The parts merged in order."""
+
+def fit_from_stats(
+    vehicle: Vehicle,
+    *,
+    parts: bytes,
+    validate_parts: Optional[bytes],
+    mapping: Optional[str],
+    threads: Optional[int],
+    inflow: str,
+    linear_vh: bool,
+    rotor_inertia: str,
+    drop_invalid: bool,
+    loads_low_pass: Optional[float],
+    keep_ground: bool,
+) -> Results:
+    """The Eq. 22 fit from statistics parts (no residual pass, no diagnosis)."""

@@ -2,9 +2,9 @@
 //! per variant (same names), carrying the message, the exit code `mrsysid` would give,
 //! and where the error happened (file; line, message, byte or sample; field).
 
-use mrsysid::{Error, StatsError};
 use mrsysid::io::{IoError, Location};
 use mrsysid::vehicle::VehicleSource;
+use mrsysid::{Error, StatsError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

@@ -23,6 +23,51 @@ use crate::vehicle::Vehicle;
 /// How often the calling thread looks for a pending Ctrl-C while a fit runs.
 const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
+/// The options every entry point shares: how logs are read and what model is fitted.
+pub struct Options<'a> {
+    pub mapping: Option<PathBuf>,
+    pub threads: Option<usize>,
+    pub inflow: &'a str,
+    pub linear_vh: bool,
+    pub rotor_inertia: &'a str,
+    pub drop_invalid: bool,
+    pub loads_low_pass: Option<f64>,
+    pub keep_ground: bool,
+}
+
+impl Options<'_> {
+    /// The library's builder for `vehicle` with these options (no log yet).
+    pub fn builder(&self, py: Python<'_>, vehicle: &Vehicle) -> PyResult<Identification> {
+        let options = ModelOptions {
+            inflow: option(py, "inflow", self.inflow)?,
+            linear_vh_terms: self.linear_vh,
+            rotor_inertia: option(py, "rotor_inertia", self.rotor_inertia)?,
+        };
+        let mut job = Identification::new(vehicle.inner.clone())
+            .model_options(options)
+            .read_options(ReadOptions {
+                invalid: if self.drop_invalid {
+                    InvalidSamples::DropAndCount
+                } else {
+                    InvalidSamples::Error
+                },
+                airborne_only: !self.keep_ground,
+                ..ReadOptions::default()
+            });
+        if let Some(hz) = self.loads_low_pass {
+            job = job.loads_low_pass(hz);
+        }
+        if let Some(path) = &self.mapping {
+            let mapping = Mapping::from_toml_file(path).map_err(|e| to_py(py, &e.into()))?;
+            job = job.mapping(mapping);
+        }
+        if let Some(n) = self.threads {
+            job = job.threads(n);
+        }
+        Ok(job)
+    }
+}
+
 /// Fits `vehicle`'s model to log files and tables (see `mrsysid.fit` for the arguments).
 #[pyfunction]
 #[pyo3(signature = (
@@ -52,23 +97,19 @@ pub fn fit<'py>(
     keep_ground: bool,
     residual_pass: bool,
 ) -> PyResult<Results> {
-    let options = ModelOptions {
-        inflow: option(py, "inflow", inflow)?,
-        linear_vh_terms: linear_vh,
-        rotor_inertia: option(py, "rotor_inertia", rotor_inertia)?,
+    let options = Options {
+        mapping,
+        threads,
+        inflow,
+        linear_vh,
+        rotor_inertia,
+        drop_invalid,
+        loads_low_pass,
+        keep_ground,
     };
     let rotors = vehicle.inner.rotor_count();
-    let mut job = Identification::new(vehicle.inner.clone())
-        .model_options(options)
-        .read_options(ReadOptions {
-            invalid: if drop_invalid {
-                InvalidSamples::DropAndCount
-            } else {
-                InvalidSamples::Error
-            },
-            airborne_only: !keep_ground,
-            ..ReadOptions::default()
-        })
+    let mut job = options
+        .builder(py, &vehicle)?
         .holdout(Holdout {
             blocks: holdout_blocks,
             guard_seconds: holdout_guard,
@@ -76,9 +117,6 @@ pub fn fit<'py>(
         .diagnose(diagnose)
         .residual_pass(residual_pass)
         .logs(logs);
-    if let Some(hz) = loads_low_pass {
-        job = job.loads_low_pass(hz);
-    }
     if estimate_loads_low_pass {
         job = job.estimate_loads_low_pass();
     }
@@ -95,13 +133,6 @@ pub fn fit<'py>(
     }
     for (name, columns) in validate_tables {
         job = job.validate(memory_log(py, name, &columns, needs)?);
-    }
-    if let Some(path) = mapping {
-        let mapping = Mapping::from_toml_file(&path).map_err(|e| to_py(py, &e.into()))?;
-        job = job.mapping(mapping);
-    }
-    if let Some(n) = threads {
-        job = job.threads(n);
     }
     let cancel = Arc::new(AtomicBool::new(false));
     let job = job.cancel(cancel.clone());
@@ -124,7 +155,7 @@ fn option<T: serde::de::DeserializeOwned>(py: Python<'_>, what: &str, name: &str
 }
 
 /// A table as a log in memory, its samples checked by the library.
-fn memory_log(
+pub fn memory_log(
     py: Python<'_>,
     name: String,
     columns: &Bound<'_, PyDict>,

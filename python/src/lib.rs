@@ -10,6 +10,7 @@ mod errors;
 mod fit;
 mod model;
 mod results;
+mod stats;
 mod tables;
 mod vehicle;
 
@@ -24,5 +25,8 @@ fn _mrsysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<results::Results>()?;
     m.add_class::<model::Model>()?;
     m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::accumulate, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::merge_stats, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::fit_from_stats, m)?)?;
     Ok(())
 }

@@ -1,0 +1,67 @@
+"""Statistics as data from Python: parts equal to the command line's, a fit from them
+equal to the direct fit, and a fleet of logs on a Dask LocalCluster."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import mrsysid
+from mrsysid.errors import StatsError
+
+from conftest import FLIGHT, QUAD_X, SWEEP, run_cli
+
+
+def test_parts_are_the_cli_bytes_and_fit_as_the_direct_fit(cli: Path, tmp_path: Path, quad_x) -> None:
+    # The same bytes from the command line and from Python (threads change nothing).
+    run_cli(cli, "accumulate", SWEEP, "--vehicle", QUAD_X, "-o", tmp_path / "sweep.stats")
+    sweep = mrsysid.accumulate(quad_x, SWEEP, threads=1)
+    assert (tmp_path / "sweep.stats").read_bytes() == sweep
+    flight = mrsysid.accumulate(quad_x, FLIGHT)
+    from_stats = mrsysid.fit_from_stats(quad_x, [sweep, flight])
+    direct = mrsysid.fit(quad_x, [SWEEP, FLIGHT], residual_pass=False, diagnose=False)
+    # Tolerance zero: the same statistics merged in the same order.
+    pd.testing.assert_frame_equal(from_stats.parameters, direct.parameters, rtol=0, atol=0)
+    pd.testing.assert_frame_equal(from_stats.metrics, direct.metrics, rtol=0, atol=0)
+    with pytest.raises(StatsError, match="at least two fit logs"):
+        mrsysid.fit_from_stats(quad_x, sweep)
+    with pytest.raises(StatsError, match="in two statistics parts"):
+        mrsysid.merge_stats([sweep, sweep])
+    with pytest.raises(StatsError, match="not a mrsysid statistics file"):
+        mrsysid.merge_stats([sweep, b"not a part"])
+
+
+def split_sweep(tmp_path: Path, logs: int) -> list:
+    """The shipped 2000-point sweep cut into `logs` contract CSVs of equal length."""
+    lines = SWEEP.read_text().splitlines()
+    header, rows = lines[0], lines[1:]
+    n = len(rows) // logs
+    paths = []
+    for k in range(logs):
+        path = tmp_path / f"sweep-{k:02d}.csv"
+        path.write_text("\n".join([header, *rows[k * n : (k + 1) * n]]) + "\n")
+        paths.append(path)
+    return paths
+
+
+def test_a_fleet_on_two_dask_workers_equals_the_single_process_fit(tmp_path: Path, quad_x) -> None:
+    distributed = pytest.importorskip("distributed")
+    from mrsysid.dask import fit_fleet
+
+    logs = split_sweep(tmp_path, 50)
+    corrupt = tmp_path / "corrupt.csv"
+    corrupt.write_text("t,u,v\n0,1\n")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as client:
+        fleet = fit_fleet([*logs[:40], corrupt], QUAD_X, validate=logs[40:], client=client)
+    assert fleet.fitted == [str(p) for p in logs[:40]]
+    assert list(fleet.failed) == [str(corrupt)]
+    assert "corrupt.csv" in fleet.failed[str(corrupt)]
+    direct = mrsysid.fit(
+        quad_x, logs[:40], validate=logs[40:], residual_pass=False, diagnose=False
+    )
+    pd.testing.assert_frame_equal(fleet.results.parameters, direct.parameters, rtol=0, atol=0)
+    pd.testing.assert_frame_equal(fleet.results.metrics, direct.metrics, rtol=0, atol=0)
