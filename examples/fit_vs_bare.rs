@@ -14,6 +14,11 @@
 //! commit) every `fit` is also run with that binary, right after, for before/after
 //! figures from the same machine state.
 //!
+//! With `MRSYSID_BENCH_LOG=flight` the log is instead a simulated quad× flight of that
+//! many rows at 500 Hz (seed 9) without its `omega_dot` columns, so the fit derives ω̇
+//! as it must on most real logs (`mrsysid simulate --mode flight`, minutes at 1 M rows,
+//! kept in `$MRSYSID_BENCH_DIR` like the sweep).
+//!
 //! The argument is the row count. The 1 M-row quad× sweep is simulated once with
 //! `target/release/mrsysid simulate --preset quad_x --mode sweep --points 1000000 --seed 9`
 //! into `$MRSYSID_BENCH_DIR` (default: the system temp dir) and kept there for later
@@ -63,15 +68,28 @@ fn main() {
     let dir = std::env::var_os("MRSYSID_BENCH_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(std::env::temp_dir);
-    let sweep = dir.join("mrsysid-sweep-1m.csv");
-    if !sweep.exists() {
-        simulate(&bin, &sweep);
-    }
-    let copies = rows / SWEEP_ROWS;
-    let log = dir.join(format!("mrsysid-fit-{rows}.csv"));
-    let second = dir.join(format!("mrsysid-fit-{rows}-b.csv"));
-    shifted_copies(&sweep, &log, copies, 0);
-    shifted_copies(&sweep, &second, copies, copies);
+    let flight = std::env::var("MRSYSID_BENCH_LOG").is_ok_and(|v| v == "flight");
+    let (log, second) = if flight {
+        // A flight of `rows` samples at 500 Hz, its ω̇ columns left out (derived).
+        let log = dir.join(format!("mrsysid-flight-{rows}-no-omega-dot.csv"));
+        if !log.exists() {
+            simulate_flight(&bin, rows, &log);
+        }
+        let second = dir.join(format!("mrsysid-flight-{rows}-no-omega-dot-b.csv"));
+        shifted_copies(&log, &second, 1, 1);
+        (log, second)
+    } else {
+        let sweep = dir.join("mrsysid-sweep-1m.csv");
+        if !sweep.exists() {
+            simulate(&bin, &sweep);
+        }
+        let copies = rows / SWEEP_ROWS;
+        let log = dir.join(format!("mrsysid-fit-{rows}.csv"));
+        let second = dir.join(format!("mrsysid-fit-{rows}-b.csv"));
+        shifted_copies(&sweep, &log, copies, 0);
+        shifted_copies(&sweep, &second, copies, copies);
+        (log, second)
+    };
     let mb = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len()) / 1_000_000;
     println!("log: {} ({} rows, {} MB)", log.display(), rows, mb(&log));
 
@@ -85,7 +103,7 @@ fn main() {
     let mut parse_two = Vec::new();
     let mut time_references = |parse: &mut Vec<Duration>| {
         let (b, records) = bare_pass(&log, false);
-        assert_eq!(records, rows, "bare pass record count");
+        assert!(flight || records == rows, "bare pass record count");
         bare.push(b);
         parse.push(bare_pass(&log, true).0);
     };
@@ -225,6 +243,43 @@ fn fastest(best: Option<Measured>, m: Measured) -> Measured {
 }
 
 /// Simulates the 1 M-point quad× sweep into `out`.
+/// Simulates a quad× flight of `rows` samples (500 Hz, seed 9) into `out` without its
+/// `omega_dot_*` columns, so that the fit derives ω̇ as it must for most real logs.
+fn simulate_flight(bin: &Path, rows: u64, out: &Path) {
+    let full = out.with_extension("with-omega-dot.csv");
+    println!("simulating {} (minutes) ...", full.display());
+    let seconds = (rows - 1) as f64 / 500.0;
+    let status = Command::new(bin)
+        .args(["simulate", "--preset", "quad_x", "--mode", "flight"])
+        .args(["--duration", &seconds.to_string(), "--log-rate", "500"])
+        .args(["--seed", "9", "--out"])
+        .arg(&full)
+        .status()
+        .expect("run mrsysid simulate");
+    assert!(status.success(), "mrsysid simulate failed");
+    let mut rows_in = lines(&full);
+    let header = rows_in.next().expect("header");
+    let keep: Vec<bool> = header
+        .split(',')
+        .map(|c| !c.starts_with("omega_dot"))
+        .collect();
+    let mut w = BufWriter::new(File::create(out).expect("create log"));
+    for line in std::iter::once(header).chain(rows_in) {
+        let fields: Vec<&str> = line
+            .split(',')
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .map(|(f, _)| f)
+            .collect();
+        writeln!(w, "{}", fields.join(",")).expect("write");
+    }
+    w.into_inner()
+        .expect("write log")
+        .sync_all()
+        .expect("sync log");
+    std::fs::remove_file(&full).expect("remove the full log");
+}
+
 fn simulate(bin: &Path, out: &Path) {
     println!("simulating {} (minutes) ...", out.display());
     let status = Command::new(bin)

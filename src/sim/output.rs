@@ -2,8 +2,10 @@
 //!
 //! Column order: `t,u,v,w,p,q,r,omega_1..omega_N`, then `fx,fy,fz,mx,my,mz` (unless the
 //! log is IMU-only), `omega_dot_1..omega_dot_N`, `ax,ay,az`, `height`, `qw,qx,qy,qz` when
-//! present. Numbers are rounded to [`SIGNIFICANT_DIGITS`] significant digits and printed
-//! in Rust's shortest round-trip form, so output is byte-for-byte reproducible.
+//! present. Numbers are rounded to [`SIGNIFICANT_DIGITS`] significant digits, time to
+//! [`TIME_RESOLUTION`] (six significant digits would merge the samples of a 500 Hz log
+//! from t = 1000 s on), and printed in Rust's shortest round-trip form, so output is
+//! byte-for-byte reproducible.
 
 use std::io::Write;
 use std::path::Path;
@@ -12,6 +14,9 @@ use crate::sample::SampleChunk;
 
 /// Significant digits of every number written.
 pub const SIGNIFICANT_DIGITS: usize = 6;
+
+/// Resolution of the time column written, s: 1 µs (a ULog's clock).
+pub const TIME_RESOLUTION: f64 = 1e-6;
 
 /// A table of named columns of equal length.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -88,12 +93,17 @@ impl LogTable {
         out.extend_from_slice(header.join(",").as_bytes());
         out.push(b'\n');
         for k in 0..self.len() {
-            for (j, (_, v)) in self.columns.iter().enumerate() {
+            for (j, (name, v)) in self.columns.iter().enumerate() {
                 if j > 0 {
                     out.push(b',');
                 }
+                let x = if name == "t" {
+                    round_time(v[k])
+                } else {
+                    round_significant(v[k])
+                };
                 // Writing into a Vec cannot fail.
-                let _ = write!(out, "{}", round_significant(v[k]));
+                let _ = write!(out, "{x}");
             }
             out.push(b'\n');
         }
@@ -108,6 +118,17 @@ impl LogTable {
     }
 }
 
+/// Time `t` (s) rounded to [`TIME_RESOLUTION`]: the nearest double to the decimal with
+/// six decimals, as parsing the written text gives (−0 becomes 0).
+pub fn round_time(t: f64) -> f64 {
+    let micro = (t / TIME_RESOLUTION).round();
+    if micro == 0.0 || !micro.is_finite() {
+        return if micro == 0.0 { 0.0 } else { t };
+    }
+    // An integer count of µs over 10⁶, both exact: one correctly rounded division.
+    micro / 1e6
+}
+
 /// `x` rounded to [`SIGNIFICANT_DIGITS`] significant digits (−0 becomes 0).
 pub fn round_significant(x: f64) -> f64 {
     if x == 0.0 || !x.is_finite() {
@@ -115,4 +136,28 @@ pub fn round_significant(x: f64) -> f64 {
     }
     let s = format!("{:.*e}", SIGNIFICANT_DIGITS - 1, x);
     s.parse().unwrap_or(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Six significant digits wrote t = 1000, 1000.002 and 1000.004 s of a 500 Hz log
+    /// all as `1000` (a duplicate timestamp the reader refuses); times are written to the
+    /// µs, and a time with six or fewer significant digits is written as before.
+    #[test]
+    fn times_are_written_to_the_microsecond() {
+        let t: Vec<f64> = (499_999..500_003).map(|k| k as f64 * 0.002).collect();
+        let table = LogTable {
+            columns: vec![("t".into(), t), ("u".into(), vec![1.234_567_89; 4])],
+        };
+        let text = String::from_utf8(table.to_csv_bytes()).expect("utf-8");
+        assert_eq!(
+            text,
+            "t,u\n999.998,1.23457\n1000,1.23457\n1000.002,1.23457\n1000.004,1.23457\n"
+        );
+        for t in [0.0, 0.01, 0.07, 29.99, 59.998, 123.456, 1999.0] {
+            assert_eq!(round_time(t), round_significant(t), "{t}");
+        }
+    }
 }
