@@ -34,7 +34,7 @@ fn channels(chunk: &mut SampleChunk) -> impl Iterator<Item = &mut Vec<f64>> {
         .iter_mut()
         .chain(chunk.rates.iter_mut())
         .chain(chunk.omega.iter_mut())
-        .chain(chunk.omega_dot.iter_mut())
+        .chain(chunk.omega_dot.iter_mut().flatten())
 }
 
 impl ConsistentFilter {
@@ -69,7 +69,7 @@ impl ConsistentFilter {
                     .iter()
                     .chain(&newest.rates)
                     .chain(&newest.omega)
-                    .chain(&newest.omega_dot)
+                    .chain(newest.omega_dot.iter().flatten())
                     .map(|v| v[k]),
             );
             let t = newest.t[k];

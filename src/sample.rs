@@ -57,8 +57,8 @@ impl std::fmt::Display for Axis {
 
 /// A chunk of consecutive samples, one vector per signal (structure of arrays).
 ///
-/// All vectors hold `len()` values, except the optional ones, which are either empty
-/// (signal absent) or hold `len()` values.
+/// Every vector holds `len()` values. An optional signal is `None` when the data do not
+/// carry it, and otherwise holds `len()` values like the others.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SampleChunk {
     /// Time, s.
@@ -69,39 +69,40 @@ pub struct SampleChunk {
     pub rates: [Vec<f64>; 3],
     /// Rotor speeds Ω_i, rad/s: one vector per rotor, numbered as in the vehicle.
     pub omega: Vec<Vec<f64>>,
-    /// Rotor accelerations Ω̇_i, rad/s², one vector per rotor; empty when not available.
-    pub omega_dot: Vec<Vec<f64>>,
+    /// Rotor accelerations Ω̇_i, rad/s², one vector per rotor; `None` when not available.
+    pub omega_dot: Option<Vec<Vec<f64>>>,
     /// Rates of the rotor accelerations Ω̈_i, rad/s³, one vector per rotor: derived from
     /// Ω̇ by the fit pipeline (`io`'s `rotor_jerk`), never read from a
-    /// log; empty when not derived.
-    pub omega_ddot: Vec<Vec<f64>>,
+    /// log; `None` when not derived.
+    pub omega_ddot: Option<Vec<Vec<f64>>>,
     /// Slow part of each rotor's Ω_i², rad²/s²: its zero-phase low-pass at each cut-off
     /// of [`crate::TRIM_BANDS_HZ`], band-major (band b, rotor i at `b · N + i`).
     /// Derived by the fit pipeline for the diagnosis's trim-moment candidates, never read
-    /// from a log; empty when not derived.
-    pub omega_squared_slow: Vec<Vec<f64>>,
+    /// from a log; `None` when not derived.
+    pub omega_squared_slow: Option<Vec<Vec<f64>>>,
     /// Measured force F_x, F_y, F_z (N) and moment M_x, M_y, M_z (N m), body axes,
     /// gravity excluded, in [`Axis`] order.
     pub wrench: [Vec<f64>; 6],
-    /// CG height above ground, m (up); empty when not logged.
-    pub height: Vec<f64>,
-    /// Attitude quaternion body→NED `[qw, qx, qy, qz]`; each vector empty when not
-    /// logged.
-    pub attitude: [Vec<f64>; 4],
+    /// CG height above ground, m (up); `None` when not logged.
+    pub height: Option<Vec<f64>>,
+    /// Attitude quaternion body→NED `[qw, qx, qy, qz]` (unit norm), one vector per
+    /// component; `None` when not logged.
+    pub attitude: Option<[Vec<f64>; 4]>,
 }
 
 /// A chunk whose signal vectors do not all hold one value per time stamp: the first
 /// such signal and what is wrong ([`SampleChunk::check_lengths`]).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct ChunkShapeError {
-    /// The signal, as the data contract names it (e.g. `omega3`, `qw`, `attitude`).
+    /// The signal, as the data contract names it (e.g. `omega3`, `qw`, `omega_dot`).
     pub signal: String,
     /// What is wrong, e.g. `1 values for 2 time stamps`.
     pub problem: String,
 }
 
 impl SampleChunk {
-    /// An empty chunk for `rotors` rotors, with room for `capacity` samples.
+    /// An empty chunk for `rotors` rotors, with room for `capacity` samples, carrying
+    /// rotor accelerations when `with_omega_dot` (and no other optional signal).
     pub fn with_capacity(rotors: usize, capacity: usize, with_omega_dot: bool) -> Self {
         let v = || Vec::with_capacity(capacity);
         Self {
@@ -109,16 +110,12 @@ impl SampleChunk {
             velocity: [v(), v(), v()],
             rates: [v(), v(), v()],
             omega: (0..rotors).map(|_| v()).collect(),
-            omega_dot: if with_omega_dot {
-                (0..rotors).map(|_| v()).collect()
-            } else {
-                Vec::new()
-            },
-            omega_ddot: Vec::new(),
-            omega_squared_slow: Vec::new(),
+            omega_dot: with_omega_dot.then(|| (0..rotors).map(|_| v()).collect()),
+            omega_ddot: None,
+            omega_squared_slow: None,
             wrench: [v(), v(), v(), v(), v(), v()],
-            height: Vec::new(),
-            attitude: Default::default(),
+            height: None,
+            attitude: None,
         }
     }
 
@@ -137,60 +134,39 @@ impl SampleChunk {
         self.omega.len()
     }
 
-    /// True when rotor accelerations are present.
-    pub fn has_omega_dot(&self) -> bool {
-        !self.omega_dot.is_empty()
-    }
-
-    /// True when rates of the rotor accelerations are present.
-    pub fn has_omega_ddot(&self) -> bool {
-        !self.omega_ddot.is_empty()
-    }
-
-    /// True when the slow parts of the rotors' Ω² are present.
-    pub fn has_omega_squared_slow(&self) -> bool {
-        !self.omega_squared_slow.is_empty()
-    }
-
-    /// True when the CG height is present.
-    pub fn has_height(&self) -> bool {
-        !self.height.is_empty()
-    }
-
-    /// True when the attitude is present.
-    pub fn has_attitude(&self) -> bool {
-        !self.attitude[0].is_empty()
-    }
-
-    /// Rotor count and optional signals of the chunk (the one presence check: optional
-    /// vectors are empty or full, see [`SampleChunk`]).
+    /// Rotor count and optional signals of the chunk.
     pub fn signals(&self) -> Signals {
         Signals {
             rotors: self.rotor_count(),
-            omega_dot: self.has_omega_dot(),
-            omega_ddot: self.has_omega_ddot(),
-            omega_squared_slow: self.has_omega_squared_slow(),
-            height: self.has_height(),
-            attitude: self.has_attitude(),
+            omega_dot: self.omega_dot.is_some(),
+            omega_ddot: self.omega_ddot.is_some(),
+            omega_squared_slow: self.omega_squared_slow.is_some(),
+            height: self.height.is_some(),
+            attitude: self.attitude.is_some(),
         }
     }
 
-    /// Removes all samples, keeping the allocations.
+    /// Removes all samples, keeping the allocations and the optional signals carried
+    /// (each stays `Some`, empty).
     pub fn clear(&mut self) {
         self.t.clear();
         self.velocity.iter_mut().for_each(Vec::clear);
         self.rates.iter_mut().for_each(Vec::clear);
         self.omega.iter_mut().for_each(Vec::clear);
-        self.omega_dot.iter_mut().for_each(Vec::clear);
-        self.omega_ddot.iter_mut().for_each(Vec::clear);
-        self.omega_squared_slow.iter_mut().for_each(Vec::clear);
+        self.omega_dot.iter_mut().flatten().for_each(Vec::clear);
+        self.omega_ddot.iter_mut().flatten().for_each(Vec::clear);
+        self.omega_squared_slow
+            .iter_mut()
+            .flatten()
+            .for_each(Vec::clear);
         self.wrench.iter_mut().for_each(Vec::clear);
-        self.height.clear();
-        self.attitude.iter_mut().for_each(Vec::clear);
+        self.height.iter_mut().for_each(Vec::clear);
+        self.attitude.iter_mut().flatten().for_each(Vec::clear);
     }
 
-    /// Appends one sample. `omega_dot` and `height` must be given exactly when the chunk
-    /// carries them.
+    /// Appends one sample. `omega_dot` must be given exactly when the chunk carries it;
+    /// `height` and `attitude` exactly when it carries them or holds no sample yet (the
+    /// first sample that gives one makes the chunk carry it).
     pub fn push(&mut self, s: &Sample) {
         self.t.push(s.t);
         for k in 0..3 {
@@ -200,17 +176,20 @@ impl SampleChunk {
         for (dst, &w) in self.omega.iter_mut().zip(&s.omega) {
             dst.push(w);
         }
-        for (dst, &w) in self.omega_dot.iter_mut().zip(&s.omega_dot) {
-            dst.push(w);
+        if let Some(omega_dot) = &mut self.omega_dot {
+            for (dst, &w) in omega_dot.iter_mut().zip(&s.omega_dot) {
+                dst.push(w);
+            }
         }
         for (dst, &f) in self.wrench.iter_mut().zip(&s.wrench) {
             dst.push(f);
         }
         if let Some(h) = s.height {
-            self.height.push(h);
+            self.height.get_or_insert_with(Vec::new).push(h);
         }
         if let Some(q) = s.attitude {
-            for (dst, &c) in self.attitude.iter_mut().zip(&q) {
+            let dst = self.attitude.get_or_insert_with(Default::default);
+            for (dst, &c) in dst.iter_mut().zip(&q) {
                 dst.push(c);
             }
         }
@@ -239,8 +218,10 @@ impl SampleChunk {
         });
     }
 
-    /// `append(dst, src)` for every series of this chunk and the same series of `src`
-    /// (the rotor series made as many as `src` has first).
+    /// `append(dst, src)` for every series of `src` and the same series of this chunk
+    /// (the rotor series of each kind made as many as `src` has first, none when it
+    /// carries none; a height or attitude `src` carries added empty when this chunk does
+    /// not carry it).
     fn append_each(&mut self, src: &SampleChunk, mut append: impl FnMut(&mut Vec<f64>, &[f64])) {
         append(&mut self.t, &src.t);
         for k in 0..3 {
@@ -254,15 +235,27 @@ impl SampleChunk {
             }
         };
         rotors(&mut self.omega, &src.omega);
-        rotors(&mut self.omega_dot, &src.omega_dot);
-        rotors(&mut self.omega_ddot, &src.omega_ddot);
-        rotors(&mut self.omega_squared_slow, &src.omega_squared_slow);
+        for (dst, src) in [
+            (&mut self.omega_dot, &src.omega_dot),
+            (&mut self.omega_ddot, &src.omega_ddot),
+            (&mut self.omega_squared_slow, &src.omega_squared_slow),
+        ] {
+            match src {
+                Some(src) => rotors(dst.get_or_insert_with(Vec::new), src),
+                None => *dst = None,
+            }
+        }
         for (d, s) in self.wrench.iter_mut().zip(&src.wrench) {
             append(d, s);
         }
-        append(&mut self.height, &src.height);
-        for (d, s) in self.attitude.iter_mut().zip(&src.attitude) {
-            append(d, s);
+        if let Some(s) = &src.height {
+            append(self.height.get_or_insert_with(Vec::new), s);
+        }
+        if let Some(src) = &src.attitude {
+            let dst = self.attitude.get_or_insert_with(Default::default);
+            for (d, s) in dst.iter_mut().zip(src) {
+                append(d, s);
+            }
         }
     }
 
@@ -273,17 +266,16 @@ impl SampleChunk {
             velocity: self.velocity.each_ref().map(|v| v[k]),
             rates: self.rates.each_ref().map(|v| v[k]),
             omega: self.omega.iter().map(|v| v[k]).collect(),
-            omega_dot: self.omega_dot.iter().map(|v| v[k]).collect(),
+            omega_dot: self.omega_dot.iter().flatten().map(|v| v[k]).collect(),
             wrench: self.wrench.each_ref().map(|v| v[k]),
-            height: self.height.get(k).copied(),
-            attitude: self
-                .has_attitude()
-                .then(|| self.attitude.each_ref().map(|v| v[k])),
+            height: self.height.as_ref().map(|h| h[k]),
+            attitude: self.attitude.as_ref().map(|q| q.each_ref().map(|v| v[k])),
         }
     }
 
-    /// Checks that every signal vector holds [`Self::len`] values (the optional ones none
-    /// or all); else names the first signal that does not and what is wrong.
+    /// Checks that every signal vector holds [`Self::len`] values (and an optional rotor
+    /// signal one vector per rotor); else names the first signal that does not and what
+    /// is wrong.
     pub(crate) fn check_lengths(&self) -> Result<(), ChunkShapeError> {
         let n = self.len();
         let shape = |signal: String, problem: String| ChunkShapeError { signal, problem };
@@ -300,56 +292,44 @@ impl SampleChunk {
         for (i, w) in self.omega.iter().enumerate() {
             required.push((format!("omega{}", i + 1), w.len()));
         }
+        let rotors = self.omega.len();
+        let bands = TRIM_BANDS_HZ.len();
+        for (name, series, count, what) in [
+            (
+                "omega_dot",
+                &self.omega_dot,
+                rotors,
+                format!("rotor acceleration series for {rotors} rotors"),
+            ),
+            (
+                "omega_ddot",
+                &self.omega_ddot,
+                rotors,
+                format!("series of rotor-acceleration rates for {rotors} rotors"),
+            ),
+            (
+                "omega_squared_slow",
+                &self.omega_squared_slow,
+                bands * rotors,
+                format!("slow thrust series for {rotors} rotors in {bands} bands"),
+            ),
+        ] {
+            let Some(series) = series else { continue };
+            if series.len() != count {
+                return Err(shape(name.into(), format!("{} {what}", series.len())));
+            }
+            for (i, w) in series.iter().enumerate() {
+                required.push((format!("{name}{}", i + 1), w.len()));
+            }
+        }
         let mut optional: Vec<(String, usize)> = Vec::new();
-        if self.has_omega_dot() {
-            if self.omega_dot.len() != self.omega.len() {
-                return Err(shape(
-                    "omega_dot".into(),
-                    format!(
-                        "{} rotor acceleration series for {} rotors",
-                        self.omega_dot.len(),
-                        self.omega.len()
-                    ),
-                ));
-            }
-            for (i, w) in self.omega_dot.iter().enumerate() {
-                required.push((format!("omega_dot{}", i + 1), w.len()));
-            }
+        if let Some(h) = &self.height {
+            optional.push(("height".into(), h.len()));
         }
-        if self.has_omega_ddot() {
-            if self.omega_ddot.len() != self.omega.len() {
-                return Err(shape(
-                    "omega_ddot".into(),
-                    format!(
-                        "{} series of rotor-acceleration rates for {} rotors",
-                        self.omega_ddot.len(),
-                        self.omega.len()
-                    ),
-                ));
+        if let Some(q) = &self.attitude {
+            for (k, name) in ["qw", "qx", "qy", "qz"].iter().enumerate() {
+                optional.push((name.to_string(), q[k].len()));
             }
-            for (i, w) in self.omega_ddot.iter().enumerate() {
-                required.push((format!("omega_ddot{}", i + 1), w.len()));
-            }
-        }
-        if self.has_omega_squared_slow() {
-            let bands = TRIM_BANDS_HZ.len();
-            if self.omega_squared_slow.len() != bands * self.omega.len() {
-                return Err(shape(
-                    "omega_squared_slow".into(),
-                    format!(
-                        "{} slow thrust series for {} rotors in {bands} bands",
-                        self.omega_squared_slow.len(),
-                        self.omega.len()
-                    ),
-                ));
-            }
-            for (i, w) in self.omega_squared_slow.iter().enumerate() {
-                required.push((format!("omega_squared_slow{}", i + 1), w.len()));
-            }
-        }
-        optional.push(("height".into(), self.height.len()));
-        for (k, name) in ["qw", "qx", "qy", "qz"].iter().enumerate() {
-            optional.push((name.to_string(), self.attitude[k].len()));
         }
         if self.omega.is_empty() && n > 0 {
             return Err(shape("omega".into(), "no rotor speed series".into()));
@@ -360,19 +340,12 @@ impl SampleChunk {
             }
         }
         for (name, len) in optional {
-            if len != 0 && len != n {
+            if len != n {
                 return Err(shape(
                     name,
                     format!("{len} values for {n} time stamps (give all or none)"),
                 ));
             }
-        }
-        let quaternion: Vec<usize> = self.attitude.iter().map(Vec::len).collect();
-        if quaternion.iter().any(|&l| l != quaternion[0]) {
-            return Err(shape(
-                "attitude".into(),
-                "give all four quaternion components or none".into(),
-            ));
         }
         Ok(())
     }
@@ -404,12 +377,15 @@ mod tests {
         assert_eq!(b.sample(0), a.sample(1));
         assert_eq!(b.sample(1), a.sample(2));
         // Gathered rows 3, 0, 2 (with Ω̈ and attitude) equal the runs appended one by one.
-        a.omega_ddot = a
-            .omega
-            .iter()
-            .map(|w| w.iter().map(|x| -x).collect())
-            .collect();
-        a.attitude = std::array::from_fn(|c| (0..4).map(|k| (c * k) as f64).collect());
+        a.omega_ddot = Some(
+            a.omega
+                .iter()
+                .map(|w| w.iter().map(|x| -x).collect())
+                .collect(),
+        );
+        a.attitude = Some(std::array::from_fn(|c| {
+            (0..4).map(|k| (c * k) as f64).collect()
+        }));
         let (mut by_rows, mut by_runs) = (SampleChunk::default(), SampleChunk::default());
         by_rows.extend_from_rows(&a, &[3, 0, 2]);
         for k in [3, 0, 2] {
@@ -450,19 +426,19 @@ mod tests {
             shape("omega2", "1 values for 2 time stamps")
         );
         let mut partial = c.clone();
-        partial.height = vec![1.0];
+        partial.height = Some(vec![1.0]);
         assert_eq!(
             partial.check_lengths(),
             shape("height", "1 values for 2 time stamps (give all or none)")
         );
         let mut three = c.clone();
-        three.attitude[..3].fill(vec![0.0; 2]);
+        three.attitude = Some([vec![1.0; 2], vec![0.0; 2], vec![0.0; 2], Vec::new()]);
         assert_eq!(
             three.check_lengths(),
-            shape("attitude", "give all four quaternion components or none")
+            shape("qz", "0 values for 2 time stamps (give all or none)")
         );
         let mut rotors = c.clone();
-        rotors.omega_dot.pop();
+        rotors.omega_dot.as_mut().expect("Ω̇ carried").pop();
         assert_eq!(
             rotors.check_lengths(),
             shape("omega_dot", "1 rotor acceleration series for 2 rotors")

@@ -89,7 +89,8 @@ impl MemoryLog {
     }
 
     /// A log named `name` from consecutive `chunks` (each in the layout of
-    /// [`SampleChunk`]: every signal vector of one length, optional ones empty or full).
+    /// [`SampleChunk`]: every signal vector of one length), every one carrying the same
+    /// rotor count and optional signals.
     pub fn from_chunks(
         name: &str,
         chunks: impl IntoIterator<Item = SampleChunk>,
@@ -249,15 +250,19 @@ fn check_values(c: &SampleChunk, previous: Option<f64>) -> Result<(), (usize, St
     for (i, w) in c.omega.iter().enumerate() {
         series.push((format!("omega{}", i + 1), w));
     }
-    for (i, w) in c.omega_dot.iter().enumerate() {
+    for (i, w) in c.omega_dot.iter().flatten().enumerate() {
         series.push((format!("omega_dot{}", i + 1), w));
     }
     for (k, name) in ["fx", "fy", "fz", "mx", "my", "mz"].iter().enumerate() {
         series.push((name.to_string(), &c.wrench[k]));
     }
-    series.push(("height".into(), &c.height));
-    for (k, name) in ["qw", "qx", "qy", "qz"].iter().enumerate() {
-        series.push((name.to_string(), &c.attitude[k]));
+    if let Some(height) = &c.height {
+        series.push(("height".into(), height));
+    }
+    if let Some(q) = &c.attitude {
+        for (k, name) in ["qw", "qx", "qy", "qz"].iter().enumerate() {
+            series.push((name.to_string(), &q[k]));
+        }
     }
     for (name, v) in &series {
         if let Some(k) = v.iter().position(|x| !x.is_finite()) {
@@ -283,17 +288,19 @@ fn check_values(c: &SampleChunk, previous: Option<f64>) -> Result<(), (usize, St
             ));
         }
     }
-    for k in 0..c.attitude[0].len() {
-        let norm = c.attitude.iter().map(|q| q[k] * q[k]).sum::<f64>().sqrt();
-        if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-            return Err((
-                k,
-                "attitude".into(),
-                ErrorKind::OutOfRange {
-                    value: norm,
-                    range: format!("quaternion norm 1 ± {QUATERNION_NORM_TOLERANCE}"),
-                },
-            ));
+    if let Some(attitude) = &c.attitude {
+        for k in 0..c.len() {
+            let norm = attitude.iter().map(|q| q[k] * q[k]).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+                return Err((
+                    k,
+                    "attitude".into(),
+                    ErrorKind::OutOfRange {
+                        value: norm,
+                        range: format!("quaternion norm 1 ± {QUATERNION_NORM_TOLERANCE}"),
+                    },
+                ));
+            }
         }
     }
     Ok(())

@@ -17,9 +17,11 @@
 //! back costs less than differentiating again; so are the slow rotor thrusts of a
 //! diagnosis (96 B per sample of a quad×), which need seconds of samples around each.
 //!
-//! Format: per chunk, four little-endian u32 (the series counts of rotor speed,
-//! acceleration, its rate and slow thrust), then every vector of the [`SampleChunk`] in field order,
-//! each as a little-endian u64 length followed by that many little-endian f64. The file
+//! Format: per chunk, six little-endian u32 (the series counts of rotor speed, rotor
+//! acceleration, its rate, slow thrust, height and attitude; [`ABSENT`] for an optional
+//! signal the chunk does not carry), then every vector of the [`SampleChunk`] it
+//! carries in field order, each as a little-endian u64 length followed by that many
+//! little-endian f64. The file
 //! lives in [`std::env::temp_dir`] (`TMPDIR`). On Unix its name is removed as soon as it
 //! is open (the space is freed when the process ends, however it ends: Ctrl-C or a kill
 //! leave nothing behind); elsewhere it is removed when its [`Spill`] is dropped, also on
@@ -43,6 +45,43 @@ const BUFFER_BYTES: usize = 1 << 18;
 /// Most rotor series a chunk read back may claim, 64 rotors in every band (guards
 /// against a corrupted file).
 const MAX_ROTORS: u32 = 64 * crate::sample::TRIM_BANDS_HZ.len() as u32;
+
+/// The series count of an optional signal a chunk does not carry.
+const ABSENT: u32 = u32::MAX;
+
+/// The series counts opening a chunk: rotor speeds Ω, then the optional signals Ω̇, Ω̈,
+/// slow Ω² (1 series per rotor, per rotor and band), height (1) and attitude (4), `None`
+/// when absent.
+#[derive(Debug, Clone, Copy)]
+struct Counts {
+    omega: usize,
+    optional: [Option<usize>; 5],
+}
+
+impl Counts {
+    /// The counts of `c`.
+    fn of(c: &SampleChunk) -> Self {
+        let rotors = |s: &Option<Vec<Vec<f64>>>| s.as_ref().map(Vec::len);
+        Self {
+            omega: c.omega.len(),
+            optional: [
+                rotors(&c.omega_dot),
+                rotors(&c.omega_ddot),
+                rotors(&c.omega_squared_slow),
+                c.height.as_ref().map(|_| 1),
+                c.attitude.as_ref().map(|q| q.len()),
+            ],
+        }
+    }
+
+    /// The counts as written, [`ABSENT`] for a signal not carried.
+    fn to_le_bytes(self) -> impl Iterator<Item = [u8; 4]> {
+        let optional = self.optional.map(|n| n.map_or(ABSENT, |n| n as u32));
+        std::iter::once(self.omega as u32)
+            .chain(optional)
+            .map(u32::to_le_bytes)
+    }
+}
 
 /// A spill file; removes it when dropped.
 #[derive(Debug)]
@@ -142,13 +181,8 @@ impl SpillWriter {
         self.tally = [self.tally[0] + tally[0], self.tally[1] + tally[1]];
         let b = &mut self.bytes;
         b.clear();
-        for series in [
-            &chunk.omega,
-            &chunk.omega_dot,
-            &chunk.omega_ddot,
-            &chunk.omega_squared_slow,
-        ] {
-            b.extend_from_slice(&(series.len() as u32).to_le_bytes());
+        for n in Counts::of(chunk).to_le_bytes() {
+            b.extend_from_slice(&n);
         }
         for v in vectors(chunk) {
             b.extend_from_slice(&(v.len() as u64).to_le_bytes());
@@ -174,18 +208,18 @@ impl SpillWriter {
     }
 }
 
-/// The vectors of `chunk` in file order.
+/// The vectors of `chunk` in file order (the optional signals it carries).
 fn vectors(c: &SampleChunk) -> impl Iterator<Item = &Vec<f64>> {
     std::iter::once(&c.t)
         .chain(&c.velocity)
         .chain(&c.rates)
         .chain(&c.omega)
-        .chain(&c.omega_dot)
-        .chain(&c.omega_ddot)
-        .chain(&c.omega_squared_slow)
+        .chain(c.omega_dot.iter().flatten())
+        .chain(c.omega_ddot.iter().flatten())
+        .chain(c.omega_squared_slow.iter().flatten())
         .chain(&c.wrench)
-        .chain(std::iter::once(&c.height))
-        .chain(&c.attitude)
+        .chain(&c.height)
+        .chain(c.attitude.iter().flatten())
 }
 
 /// The vectors of `chunk` in file order, for filling.
@@ -194,12 +228,12 @@ fn vectors_mut(c: &mut SampleChunk) -> impl Iterator<Item = &mut Vec<f64>> {
         .chain(&mut c.velocity)
         .chain(&mut c.rates)
         .chain(&mut c.omega)
-        .chain(&mut c.omega_dot)
-        .chain(&mut c.omega_ddot)
-        .chain(&mut c.omega_squared_slow)
+        .chain(c.omega_dot.iter_mut().flatten())
+        .chain(c.omega_ddot.iter_mut().flatten())
+        .chain(c.omega_squared_slow.iter_mut().flatten())
         .chain(&mut c.wrench)
-        .chain(std::iter::once(&mut c.height))
-        .chain(&mut c.attitude)
+        .chain(&mut c.height)
+        .chain(c.attitude.iter_mut().flatten())
 }
 
 impl Spill {
@@ -261,37 +295,62 @@ impl Read for Positioned<'_> {
     }
 }
 
-/// The four rotor-series counts (Ω, Ω̇, Ω̈, slow Ω²) opening a chunk; `None` at the end
-/// of the file.
-fn read_counts(input: &mut impl Read) -> std::io::Result<Option<[usize; 4]>> {
-    let mut head = [0u8; 16];
+/// The series counts opening a chunk; `None` at the end of the file.
+fn read_counts(input: &mut impl Read) -> std::io::Result<Option<Counts>> {
+    let mut head = [0u8; 24];
     let got = input.read(&mut head[..1])?;
     if got == 0 {
         return Ok(None);
     }
     input.read_exact(&mut head[1..])?;
-    let mut counts = [0; 4];
-    for (count, b) in counts.iter_mut().zip(head.chunks_exact(4)) {
-        let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-        if n > MAX_ROTORS {
-            return Err(corrupt("rotor series count out of range"));
-        }
-        *count = n as usize;
-    }
-    Ok(Some(counts))
+    let mut raw = head
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    // The next count, one that `valid` accepts or [`ABSENT`].
+    let mut next = |valid: &dyn Fn(u32) -> bool| match raw.next() {
+        Some(ABSENT) => Ok(None),
+        Some(n) if valid(n) => Ok(Some(n as usize)),
+        _ => Err(corrupt("series count out of range")),
+    };
+    let rotors = |n| n <= MAX_ROTORS;
+    let omega = next(&rotors)?.ok_or_else(|| corrupt("no rotor speed series"))?;
+    let optional = [
+        next(&rotors)?,
+        next(&rotors)?,
+        next(&rotors)?,
+        next(&|n| n == 1)?,
+        next(&|n| n == 4)?,
+    ];
+    Ok(Some(Counts { omega, optional }))
 }
 
 /// Reads one chunk's vectors into `chunk` (its allocations reused); `bytes` is scratch.
 fn read_chunk(
     input: &mut impl Read,
-    [omega, omega_dot, omega_ddot, slow]: [usize; 4],
+    counts: Counts,
     chunk: &mut SampleChunk,
     bytes: &mut Vec<u8>,
 ) -> std::io::Result<()> {
-    chunk.omega.resize_with(omega, Vec::new);
-    chunk.omega_dot.resize_with(omega_dot, Vec::new);
-    chunk.omega_ddot.resize_with(omega_ddot, Vec::new);
-    chunk.omega_squared_slow.resize_with(slow, Vec::new);
+    let [omega_dot, omega_ddot, slow, height, attitude] = counts.optional;
+    let rotors = |series: &mut Option<Vec<Vec<f64>>>, count: Option<usize>| match count {
+        Some(n) => series.get_or_insert_with(Vec::new).resize_with(n, Vec::new),
+        None => *series = None,
+    };
+    chunk.omega.resize_with(counts.omega, Vec::new);
+    rotors(&mut chunk.omega_dot, omega_dot);
+    rotors(&mut chunk.omega_ddot, omega_ddot);
+    rotors(&mut chunk.omega_squared_slow, slow);
+    // One height and four attitude series when present (`read_counts`).
+    if height.is_none() {
+        chunk.height = None;
+    } else {
+        chunk.height.get_or_insert_with(Vec::new);
+    }
+    if attitude.is_none() {
+        chunk.attitude = None;
+    } else {
+        chunk.attitude.get_or_insert_with(Default::default);
+    }
     for v in vectors_mut(chunk) {
         let mut len = [0u8; 8];
         input.read_exact(&mut len)?;
@@ -347,19 +406,22 @@ mod tests {
             if rotors == 6 {
                 // Derived rates of rotor acceleration and slow thrusts travel with the
                 // chunk.
-                c.omega_ddot = c
-                    .omega
-                    .iter()
-                    .map(|w| w.iter().map(|x| -x).collect())
-                    .collect();
-                c.omega_squared_slow = (0..crate::sample::TRIM_BANDS_HZ.len() * rotors)
-                    .map(|i| {
-                        c.omega[i % rotors]
-                            .iter()
-                            .map(|x| x * x + i as f64)
-                            .collect()
-                    })
-                    .collect();
+                c.omega_ddot = Some(
+                    c.omega
+                        .iter()
+                        .map(|w| w.iter().map(|x| -x).collect())
+                        .collect(),
+                );
+                c.omega_squared_slow = Some(
+                    (0..crate::sample::TRIM_BANDS_HZ.len() * rotors)
+                        .map(|i| {
+                            c.omega[i % rotors]
+                                .iter()
+                                .map(|x| x * x + i as f64)
+                                .collect()
+                        })
+                        .collect(),
+                );
             }
             chunks.push(c);
         }

@@ -28,7 +28,11 @@ fn diagnose_flight(effects: &[&str], duration: f64, near_ground: f64, seed: u64)
         ..Default::default()
     };
     let log = fly(&truth, &cfg, seed).unwrap();
-    let height = &log.samples.height;
+    let height = log
+        .samples
+        .height
+        .as_ref()
+        .expect("the simulator logs height");
     let low = height
         .iter()
         .filter(|&&z| z + v.props.hub_height < 8.0 * v.props.rotor_radius);

@@ -127,7 +127,7 @@ fn sample_at(c: &SampleChunk, i: usize) -> mrsysid::Sample {
         velocity: std::array::from_fn(|k| c.velocity[k][i]),
         rates: std::array::from_fn(|k| c.rates[k][i]),
         omega: c.omega.iter().map(|w| w[i]).collect(),
-        omega_dot: c.omega_dot.iter().map(|w| w[i]).collect(),
+        omega_dot: c.omega_dot.iter().flatten().map(|w| w[i]).collect(),
         wrench: std::array::from_fn(|k| c.wrench[k][i]),
         height: None,
         attitude: None,

@@ -192,7 +192,8 @@ fn units_frames_and_world_velocity_are_converted_exactly() {
     }
     // Attitude body FRD → NED: body x = east, i.e. yaw +90°: q = (cos 45°, 0, 0, sin 45°).
     let h = (0.5f64).sqrt();
-    let q: Vec<f64> = (0..4).map(|a| c.attitude[a][0]).collect();
+    let attitude = c.attitude.as_ref().expect("attitude derived");
+    let q: Vec<f64> = attitude.iter().map(|a| a[0]).collect();
     for (a, want) in [h, 0.0, 0.0, h].into_iter().enumerate() {
         assert!((q[a] - want).abs() < 1e-15, "{q:?}");
     }

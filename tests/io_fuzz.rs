@@ -119,7 +119,7 @@ fn no_panic(target: &str, case: usize, input: &[u8], f: impl FnOnce()) {
 fn fuzz_csv_reader() {
     let vehicle = quad(3e-5);
     let mut src = analytic_chunk(40, 100.0);
-    src.omega_dot.clear();
+    src.omega_dot = None;
     let base_path = tmp("base.csv");
     write_contract_csv(&base_path, [&src]).unwrap();
     let base = std::fs::read(&base_path).unwrap();

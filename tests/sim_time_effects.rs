@@ -69,9 +69,10 @@ fn rms(x: impl Iterator<Item = f64>) -> f64 {
 /// Copies the logged rotor speeds and accelerations of sample `k` into `omega`, `omega_dot`.
 fn input(log: &FlightLog, k: usize, omega: &mut [f64; 4], omega_dot: &mut [f64; 4]) {
     let s = &log.samples;
+    let logged_dot = s.omega_dot.as_ref().expect("the simulator logs Ω̇");
     for i in 0..4 {
         omega[i] = s.omega[i][k];
-        omega_dot[i] = s.omega_dot[i][k];
+        omega_dot[i] = logged_dot[i][k];
     }
 }
 
@@ -105,12 +106,11 @@ fn trim_moment_is_trimmed_by_the_rotors_and_logged() {
     let len = a.len();
     // Body-axis rotation vector of the trimmed attitude relative to the plain one.
     let quat = |s: &SampleChunk, k: usize| {
-        UnitQuaternion::from_quaternion(Quaternion::new(
-            s.attitude[0][k],
-            s.attitude[1][k],
-            s.attitude[2][k],
-            s.attitude[3][k],
-        ))
+        let q = s
+            .attitude
+            .as_ref()
+            .expect("the simulator logs the attitude");
+        UnitQuaternion::from_quaternion(Quaternion::new(q[0][k], q[1][k], q[2][k], q[3][k]))
     };
     let turn: Vec<_> = (0..len)
         .map(|k| (quat(a, k).inverse() * quat(b, k)).scaled_axis())
@@ -211,7 +211,8 @@ fn rotor_speed_lag_is_a_first_order_lag_of_the_logged_speed() {
     assert_eq!(plain.wrench, lagged.wrench);
     let h = 1.0 / cfg.log_rate;
     for i in 0..4 {
-        let (x, y, yd) = (&plain.omega[i], &lagged.omega[i], &lagged.omega_dot[i]);
+        let lagged_dot = lagged.omega_dot.as_ref().expect("the simulator logs Ω̇");
+        let (x, y, yd) = (&plain.omega[i], &lagged.omega[i], &lagged_dot[i]);
         let len = x.len();
         let yd_rms = rms(yd.iter().copied());
         let ode = (0..len)

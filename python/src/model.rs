@@ -69,12 +69,10 @@ fn sample(chunk: &SampleChunk, k: usize) -> Sample {
         velocity: chunk.velocity.each_ref().map(at),
         rates: chunk.rates.each_ref().map(at),
         omega: chunk.omega.iter().map(at).collect(),
-        omega_dot: chunk.omega_dot.iter().map(at).collect(),
+        omega_dot: chunk.omega_dot.iter().flatten().map(at).collect(),
         wrench: [0.0; 6],
-        height: chunk.height.get(k).copied(),
-        attitude: chunk
-            .has_attitude()
-            .then(|| chunk.attitude.each_ref().map(at)),
+        height: chunk.height.as_ref().map(at),
+        attitude: chunk.attitude.as_ref().map(|q| q.each_ref().map(at)),
     }
 }
 

@@ -181,14 +181,14 @@ impl<'py> Table<'py> {
                 velocity: three(&velocity),
                 rates: three(&rates),
                 omega: omega.iter().map(|v| take(v)).collect(),
-                omega_dot: omega_dot.iter().map(|v| take(v)).collect(),
+                omega_dot: (!omega_dot.is_empty())
+                    .then(|| omega_dot.iter().map(|v| take(v)).collect()),
                 wrench: std::array::from_fn(|a| {
                     wrench.get(a).map_or_else(|| vec![0.0; n], |v| take(v))
                 }),
-                height: height.map(take).unwrap_or_default(),
-                attitude: std::array::from_fn(|k| {
-                    attitude.get(k).map(|v| take(v)).unwrap_or_default()
-                }),
+                height: height.map(take),
+                attitude: (!attitude.is_empty())
+                    .then(|| std::array::from_fn(|k| take(attitude[k]))),
                 ..SampleChunk::default()
             });
             start = r.end;

@@ -295,7 +295,7 @@ pub fn screen(
     let needs_omega_dot = |m: &Vec<Signal>| m.iter().any(|s| matches!(s, Signal::ActuatorRate(_)));
     let pool: Vec<Vec<Signal>> = monomials()
         .into_iter()
-        .filter(|m| data.has_omega_dot() || !needs_omega_dot(m))
+        .filter(|m| data.omega_dot.is_some() || !needs_omega_dot(m))
         .collect();
     let tests = (pool.len() * Axis::ALL.len()) as f64;
     let per_axis = map_on_threads(&Axis::ALL, options.threads, |&axis| {

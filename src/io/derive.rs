@@ -191,7 +191,7 @@ pub struct JerkScratch {
 /// Fills `chunk.omega_ddot` with Ω̈_i, rad/s³: the Savitzky–Golay derivative (window
 /// and order of `options`) of each Ω̇_i series, one-sided at the chunk's ends and at
 /// time gaps, so that Ω̈ is a function of the chunk alone (the fit pipeline's chunks
-/// are the same from a file and from memory). Empty when the chunk has no Ω̇; 0 on a
+/// are the same from a file and from memory). `None` when the chunk has no Ω̇; 0 on a
 /// stretch too short to differentiate.
 pub fn rotor_jerk(chunk: &mut SampleChunk, options: &DeriveOptions, scratch: &mut JerkScratch) {
     let SampleChunk {
@@ -200,13 +200,18 @@ pub fn rotor_jerk(chunk: &mut SampleChunk, options: &DeriveOptions, scratch: &mu
         omega_ddot,
         ..
     } = chunk;
+    let Some(omega_dot) = omega_dot else {
+        *omega_ddot = None;
+        return;
+    };
     let n = t.len();
+    let omega_ddot = omega_ddot.get_or_insert_with(Vec::new);
     omega_ddot.resize_with(omega_dot.len(), Vec::new);
     for v in omega_ddot.iter_mut() {
         v.clear();
         v.resize(n, 0.0);
     }
-    if omega_dot.is_empty() || n < 2 {
+    if n < 2 {
         return;
     }
     let JerkScratch { intervals, weights } = scratch;
@@ -354,8 +359,9 @@ mod tests {
             let t = 0.01 * k as f64 + gap_after.map_or(0.0, |g| if k > g { 1.0 } else { 0.0 });
             c.t.push(t);
             c.omega.iter_mut().for_each(|w| w.push(700.0));
-            c.omega_dot[0].push(f(t));
-            c.omega_dot[1].push(-f(t));
+            let omega_dot = c.omega_dot.as_mut().expect("made with Ω̇");
+            omega_dot[0].push(f(t));
+            omega_dot[1].push(-f(t));
         }
         c
     }
@@ -373,8 +379,9 @@ mod tests {
             &mut JerkScratch::default(),
         );
         for (k, &t) in c.t.iter().enumerate() {
-            assert!((c.omega_ddot[0][k] - (2.0 * a * t + b)).abs() < 1e-9, "{k}");
-            assert_eq!(c.omega_ddot[1][k], -c.omega_ddot[0][k]);
+            let jerk = c.omega_ddot.as_ref().expect("Ω̈ of Ω̇");
+            assert!((jerk[0][k] - (2.0 * a * t + b)).abs() < 1e-9, "{k}");
+            assert_eq!(jerk[1][k], -jerk[0][k]);
         }
         // A step in Ω̇ across a 1 s gap: differentiated across it, the samples next to
         // the gap would see a slope of ~100 rad/s² over the window; each side is
@@ -385,11 +392,8 @@ mod tests {
             &DeriveOptions::default(),
             &mut JerkScratch::default(),
         );
-        assert!(
-            g.omega_ddot[0].iter().all(|x| x.abs() < 1e-9),
-            "{:?}",
-            g.omega_ddot[0]
-        );
+        let jerk = &g.omega_ddot.as_ref().expect("Ω̈ of Ω̇")[0];
+        assert!(jerk.iter().all(|x| x.abs() < 1e-9), "{jerk:?}");
         // No Ω̇, no Ω̈.
         let mut none = SampleChunk::with_capacity(2, 3, false);
         none.t.extend([0.0, 0.01, 0.02]);
@@ -398,7 +402,7 @@ mod tests {
             &DeriveOptions::default(),
             &mut JerkScratch::default(),
         );
-        assert!(!none.has_omega_ddot());
+        assert_eq!(none.omega_ddot, None);
     }
 
     #[test]

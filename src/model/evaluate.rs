@@ -76,7 +76,7 @@ impl SignalConstants {
             SlowSquaredActuator(band, row) => {
                 let rotors = chunk.rotor_count();
                 let start = usize::from(band) * rotors;
-                let slow = &chunk.omega_squared_slow[start..start + rotors];
+                let slow = &present(&chunk.omega_squared_slow)[start..start + rotors];
                 mix_row(
                     self.mixing.row(rows[usize::from(row) % 4]),
                     slow,
@@ -84,11 +84,17 @@ impl SignalConstants {
                     dst,
                 );
             }
-            DrDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_dot, false, dst),
-            DrDDot => mix_row(self.mixing.row(A::Rudder), &chunk.omega_ddot, false, dst),
+            DrDot => {
+                let omega_dot = present(&chunk.omega_dot);
+                mix_row(self.mixing.row(A::Rudder), omega_dot, false, dst);
+            }
+            DrDDot => {
+                let omega_ddot = present(&chunk.omega_ddot);
+                mix_row(self.mixing.row(A::Rudder), omega_ddot, false, dst);
+            }
             ActuatorRate(row) => {
-                let row = rows[usize::from(row) % 4];
-                mix_row(self.mixing.row(row), &chunk.omega_dot, false, dst);
+                let (row, omega_dot) = (rows[usize::from(row) % 4], present(&chunk.omega_dot));
+                mix_row(self.mixing.row(row), omega_dot, false, dst);
             }
             SumY2Omega | SumXYOmega | SumX2Omega | SumSigmaYOmega | SumSigmaXOmega => {
                 let w = &self.inflow_weights[s_index(s, SumY2Omega)];
@@ -105,7 +111,8 @@ impl SignalConstants {
             SquaredActuatorRate(row) => {
                 dst.fill(0.0);
                 let weights = self.mixing.row(rows[usize::from(row) % 4]);
-                for ((&m, w), wd) in weights.iter().zip(&chunk.omega).zip(&chunk.omega_dot) {
+                let omega_dot = present(&chunk.omega_dot);
+                for ((&m, w), wd) in weights.iter().zip(&chunk.omega).zip(omega_dot) {
                     let pairs = w[..n].iter().zip(&wd[..n]);
                     dst.iter_mut()
                         .zip(pairs)
@@ -114,7 +121,7 @@ impl SignalConstants {
             }
             GroundEffect => {
                 let (r, h) = (self.rotor_radius, self.hub_height);
-                let src = &chunk.height[..n];
+                let src = &present(&chunk.height)[..n];
                 dst.iter_mut()
                     .zip(src)
                     .for_each(|(d, z)| *d = ground_effect_factor(r, z + h));
@@ -122,11 +129,12 @@ impl SignalConstants {
             RotorGroundEffect(i) => {
                 let [x, y] = self.hubs[usize::from(i)];
                 let (r, h) = (self.rotor_radius, self.hub_height);
+                let (height, attitude) = (present(&chunk.height), present(&chunk.attitude));
                 for (k, d) in dst.iter_mut().enumerate() {
                     // Third row of body→NED: the down component of a body vector.
-                    let down = body_to_ned(chunk, k)[2];
+                    let down = body_to_ned(attitude, k)[2];
                     let hub_down = down[0] * x + down[1] * y - down[2] * h;
-                    *d = ground_effect_factor(r, chunk.height[k] - hub_down);
+                    *d = ground_effect_factor(r, height[k] - hub_down);
                 }
             }
             WakeImmersion(i) => {
@@ -182,9 +190,10 @@ impl SignalConstants {
             }
             NedToBody(e) => {
                 let (k, j) = (usize::from(e) / 3, usize::from(e) % 3);
+                let attitude = present(&chunk.attitude);
                 for (i, d) in dst.iter_mut().enumerate() {
                     // The NED→body element (k, j) is body→NED's (j, k).
-                    *d = body_to_ned(chunk, i)[j][k];
+                    *d = body_to_ned(attitude, i)[j][k];
                 }
             }
             VortexRing(i) => {
@@ -222,7 +231,7 @@ pub(super) fn signal_slice<'a>(
         Q => &chunk.rates[1][..n],
         R => &chunk.rates[2][..n],
         RotorSpeed(i) => &chunk.omega[usize::from(i)][..n],
-        RotorAcceleration(i) => &chunk.omega_dot[usize::from(i)][..n],
+        RotorAcceleration(i) => &present(&chunk.omega_dot)[usize::from(i)][..n],
         _ => &signals[offset..offset + n],
     }
 }
@@ -252,9 +261,16 @@ fn s_index(s: Signal, first: Signal) -> usize {
     at(s) - at(first)
 }
 
-/// Body→NED rotation of sample `k` of `chunk` from its attitude quaternion (normalised).
-fn body_to_ned(chunk: &SampleChunk, k: usize) -> [[f64; 3]; 3] {
-    let q = &chunk.attitude;
+/// The optional signal of a chunk that a computed signal needs, present since
+/// [`super::ModelStructure::check_chunk`] passed the chunk.
+fn present<T>(signal: &Option<T>) -> &T {
+    signal
+        .as_ref()
+        .expect("a signal the structure needs (checked by `check_chunk`)")
+}
+
+/// Body→NED rotation of sample `k` from the attitude quaternion series `q` (normalised).
+fn body_to_ned(q: &[Vec<f64>; 4], k: usize) -> [[f64; 3]; 3] {
     let quat = [q[0][k], q[1][k], q[2][k], q[3][k]];
     let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
     crate::util::quat_to_matrix(quat.map(|c| c / norm))
@@ -359,7 +375,7 @@ mod tests {
         assert!((col("vrs1") - vrs).abs() < 1e-12);
         // Without a height signal the ground-effect column cannot be built.
         let mut no_height = chunk.clone();
-        no_height.height.clear();
+        no_height.height = None;
         assert_eq!(
             s.assemble(&no_height, &mut ws),
             Err(ModelError::MissingHeight)

@@ -253,13 +253,13 @@ impl ModelStructure {
                 found: chunk.rotor_count(),
             });
         }
-        if self.needs_omega_dot() && !chunk.has_omega_dot() {
+        if self.needs_omega_dot() && chunk.omega_dot.is_none() {
             return Err(ModelError::MissingRotorAcceleration);
         }
-        if self.required.contains(&Signal::DrDDot) && !chunk.has_omega_ddot() {
+        if self.required.contains(&Signal::DrDDot) && chunk.omega_ddot.is_none() {
             return Err(ModelError::MissingRotorAccelerationRate);
         }
-        if self.needs_slow_thrust() && !chunk.has_omega_squared_slow() {
+        if self.needs_slow_thrust() && chunk.omega_squared_slow.is_none() {
             return Err(ModelError::MissingSlowThrust);
         }
         let per_rotor_ground = self
@@ -267,7 +267,7 @@ impl ModelStructure {
             .iter()
             .any(|s| matches!(s, Signal::RotorGroundEffect(_)));
         let needs_height = per_rotor_ground || self.required.contains(&Signal::GroundEffect);
-        if needs_height && chunk.height.len() != chunk.len() {
+        if needs_height && chunk.height.is_none() {
             return Err(ModelError::MissingHeight);
         }
         let needs_attitude = per_rotor_ground
@@ -275,7 +275,7 @@ impl ModelStructure {
                 .required
                 .iter()
                 .any(|s| matches!(s, Signal::NedToBody(_)));
-        if needs_attitude && chunk.attitude[0].len() != chunk.len() {
+        if needs_attitude && chunk.attitude.is_none() {
             return Err(ModelError::MissingAttitude);
         }
         Ok(())

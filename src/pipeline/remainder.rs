@@ -90,10 +90,9 @@ impl LogRemainder<'_> {
             self.scratch[squared].resize(n, 0.0);
             mix_row(weights, &chunk.omega, true, &mut self.scratch[squared]);
             self.scratch[rate].resize(n, 0.0);
-            if chunk.has_omega_dot() {
-                mix_row(weights, &chunk.omega_dot, false, &mut self.scratch[rate]);
-            } else {
-                self.scratch[rate].fill(0.0);
+            match &chunk.omega_dot {
+                Some(omega_dot) => mix_row(weights, omega_dot, false, &mut self.scratch[rate]),
+                None => self.scratch[rate].fill(0.0),
             }
         }
         let moments = [Axis::Mx, Axis::My, Axis::Mz];

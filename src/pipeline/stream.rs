@@ -228,16 +228,17 @@ impl Rechunker {
 /// An empty chunk with the signals of `chunk` and room for [`CHUNK_SAMPLES`] samples in
 /// each, so that filling it does not reallocate (a sweep arrives one sample at a time).
 fn empty_like(chunk: &SampleChunk) -> SampleChunk {
-    let mut empty =
-        SampleChunk::with_capacity(chunk.rotor_count(), CHUNK_SAMPLES, chunk.has_omega_dot());
-    if chunk.has_height() {
-        empty.height.reserve(CHUNK_SAMPLES);
+    let mut empty = SampleChunk::with_capacity(
+        chunk.rotor_count(),
+        CHUNK_SAMPLES,
+        chunk.omega_dot.is_some(),
+    );
+    let room = || Vec::with_capacity(CHUNK_SAMPLES);
+    if chunk.height.is_some() {
+        empty.height = Some(room());
     }
-    if chunk.has_attitude() {
-        empty
-            .attitude
-            .iter_mut()
-            .for_each(|v| v.reserve(CHUNK_SAMPLES));
+    if chunk.attitude.is_some() {
+        empty.attitude = Some([room(), room(), room(), room()]);
     }
     empty
 }

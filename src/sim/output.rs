@@ -46,15 +46,15 @@ impl LogTable {
                 columns.push((name.to_string(), v.clone()));
             }
         }
-        for (i, v) in chunk.omega_dot.iter().enumerate() {
+        for (i, v) in chunk.omega_dot.iter().flatten().enumerate() {
             columns.push((format!("omega_dot_{}", i + 1), v.clone()));
         }
         let mut table = Self { columns };
-        if chunk.has_height() {
-            table.push("height", chunk.height.clone());
+        if let Some(height) = &chunk.height {
+            table.push("height", height.clone());
         }
-        if chunk.has_attitude() {
-            for (name, v) in ["qw", "qx", "qy", "qz"].iter().zip(&chunk.attitude) {
+        if let Some(attitude) = &chunk.attitude {
+            for (name, v) in ["qw", "qx", "qy", "qz"].iter().zip(attitude) {
                 table.push(name, v.clone());
             }
         }

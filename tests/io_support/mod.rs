@@ -1,8 +1,8 @@
 //! Shared helpers of the io tests: a test vehicle and analytic sample streams.
 #![allow(dead_code)]
 
-use mrsysid::SampleChunk;
 use mrsysid::vehicle::{MassAndRotorProperties, Preset, Vehicle};
+use mrsysid::{Sample, SampleChunk};
 
 /// A quad-x test vehicle with J_z = 0 (no rotor-acceleration derivation).
 pub fn quad(rotor_inertia: f64) -> Vehicle {
@@ -29,25 +29,22 @@ pub fn analytic_chunk(n: usize, rate_hz: f64) -> SampleChunk {
     let mut c = SampleChunk::with_capacity(4, n, true);
     for k in 0..n {
         let t = 1.0 + k as f64 / rate_hz;
-        c.t.push(t);
-        for a in 0..3 {
-            c.velocity[a].push(2.0 * (0.5 * t + a as f64).sin());
-            c.rates[a].push(0.3 * (1.3 * t + a as f64).cos());
-        }
-        for i in 0..4 {
-            c.omega[i].push(900.0 + 50.0 * (2.0 * t + i as f64).sin());
-            c.omega_dot[i].push(100.0 * (2.0 * t + i as f64).cos());
-        }
-        for a in 0..6 {
-            let base = if a == 2 { -11.8 } else { 0.0 };
-            c.wrench[a].push(base + 0.1 * (0.7 * t + a as f64).sin());
-        }
-        c.height.push(1.5 + 0.1 * t);
         let half = 0.2 * (0.3 * t).sin();
-        c.attitude[0].push(half.cos());
-        c.attitude[1].push(0.0);
-        c.attitude[2].push(0.0);
-        c.attitude[3].push(half.sin());
+        c.push(&Sample {
+            t,
+            velocity: std::array::from_fn(|a| 2.0 * (0.5 * t + a as f64).sin()),
+            rates: std::array::from_fn(|a| 0.3 * (1.3 * t + a as f64).cos()),
+            omega: (0..4)
+                .map(|i| 900.0 + 50.0 * (2.0 * t + i as f64).sin())
+                .collect(),
+            omega_dot: (0..4).map(|i| 100.0 * (2.0 * t + i as f64).cos()).collect(),
+            wrench: std::array::from_fn(|a| {
+                let base = if a == 2 { -11.8 } else { 0.0 };
+                base + 0.1 * (0.7 * t + a as f64).sin()
+            }),
+            height: Some(1.5 + 0.1 * t),
+            attitude: Some([half.cos(), 0.0, 0.0, half.sin()]),
+        });
     }
     c
 }

@@ -57,18 +57,21 @@ impl LogReader {
         for i in 0..n {
             c.omega[i].push(row.omega[i]);
         }
-        for (i, v) in c.omega_dot.iter_mut().enumerate() {
-            v.push(omega_dot[i]);
+        if let Some(dst) = &mut c.omega_dot {
+            for (v, &x) in dst.iter_mut().zip(&omega_dot) {
+                v.push(x);
+            }
         }
         for (dst, v) in c.wrench.iter_mut().zip(wrench) {
             dst.push(v);
         }
-        if layout.has(Signal::Height) {
-            c.height.push(row.height);
+        // The chunk carries the log's optional signals (`prepare_optional`).
+        if let Some(height) = &mut c.height {
+            height.push(row.height);
         }
-        if layout.has(Signal::Attitude) {
-            for a in 0..4 {
-                c.attitude[a].push(row.attitude[a]);
+        if let Some(attitude) = &mut c.attitude {
+            for (dst, &q) in attitude.iter_mut().zip(&row.attitude) {
+                dst.push(q);
             }
         }
         let tally = &mut self.tally;

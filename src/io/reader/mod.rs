@@ -273,16 +273,15 @@ impl LogReader {
     }
 }
 
-/// Gives the optional vectors (height, attitude) capacity when the log carries them.
+/// Makes `chunk` carry the optional signals (height, attitude) the log carries, with
+/// room for a full chunk in each.
 fn prepare_optional(chunk: &mut SampleChunk, layout: &SlotLayout) {
+    let room = || Vec::with_capacity(CHUNK_SAMPLES);
     if layout.has(Signal::Height) {
-        chunk.height.reserve(CHUNK_SAMPLES);
+        chunk.height = Some(room());
     }
     if layout.has(Signal::Attitude) {
-        chunk
-            .attitude
-            .iter_mut()
-            .for_each(|v| v.reserve(CHUNK_SAMPLES));
+        chunk.attitude = Some([room(), room(), room(), room()]);
     }
 }
 
