@@ -255,7 +255,7 @@ fn bench(c: &mut Criterion) {
             all.extend_from(&chunk, 0..chunk.len());
         }
         // Level flight: the identity attitude, and specific force = wrench / mass.
-        all.attitude = [1.0, 0.0, 0.0, 0.0].map(|q| vec![q; FLIGHT_LOG_SAMPLES]);
+        all.attitude = Some([1.0, 0.0, 0.0, 0.0].map(|q| vec![q; FLIGHT_LOG_SAMPLES]));
         let sf = [0, 1, 2].map(|a| all.wrench[a].iter().map(|f| f / 1.2).collect());
         std::fs::write(&path, write_flight(&all, &sf, &[], None, 2)).expect("writes");
     }
