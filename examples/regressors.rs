@@ -68,7 +68,7 @@ fn main() -> ExitCode {
             println!(
                 "{:<4} {:<14} {:<18} {:>14.6e} {:>14.6e}",
                 axis.name(),
-                model.params[c.param].name,
+                model.param(c.param).name,
                 c.label,
                 x[0],
                 x[1]

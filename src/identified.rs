@@ -230,12 +230,14 @@ impl IdentifiedModel {
             message,
         };
         let mut full = ModelStructure::eq22(&self.vehicle, self.structure.options);
-        let is_eq22 = |name: &str| full.param_index(name).is_some();
-        let extra: Vec<ExtraParameter> = (0..self.structure.params.len())
-            .filter(|&p| !is_eq22(&self.structure.params[p].name))
+        let is_eq22 = |name: &str| full.param_id(name).is_some();
+        let extra: Vec<ExtraParameter> = self
+            .structure
+            .param_ids()
+            .filter(|&p| !is_eq22(&self.structure.param(p).name))
             .map(|p| ExtraParameter {
-                name: self.structure.params[p].name.clone(),
-                unit: self.structure.params[p].unit.clone(),
+                name: self.structure.param(p).name.clone(),
+                unit: self.structure.param(p).unit.clone(),
                 columns: self
                     .structure
                     .columns
@@ -254,7 +256,7 @@ impl IdentifiedModel {
                 x.columns.clone(),
             );
         }
-        let term = |s: &ModelStructure, c: &Column| (s.params[c.param].name.clone(), c.axis);
+        let term = |s: &ModelStructure, c: &Column| (s.param(c.param).name.clone(), c.axis);
         let mut kept: Vec<(String, Axis)> = self
             .structure
             .columns
@@ -318,7 +320,7 @@ impl IdentifiedModel {
             // Sensitivity of the axis' output to each parameter.
             let mut x = vec![0.0; n];
             for j in self.structure.axis_columns(axis) {
-                x[self.structure.columns[j].param] += ws.column(j)[0];
+                x[self.structure.columns[j].param.index()] += ws.column(j)[0];
             }
             let x = DVector::from_vec(x);
             (x.transpose() * c * &x)[(0, 0)].max(0.0).sqrt()
@@ -344,7 +346,7 @@ fn without(structure: &ModelStructure, left_out: &[LeftOutTerm]) -> ModelStructu
             let c = &structure.columns[j];
             !left_out
                 .iter()
-                .any(|t| t.axis == c.axis && t.parameter == structure.params[c.param].name)
+                .any(|t| t.axis == c.axis && t.parameter == structure.param(c.param).name)
         })
         .collect();
     structure.select_columns(&keep)

@@ -59,7 +59,7 @@ use crate::estimate::{self, AxisMetrics, FitOptions};
 use crate::identified::IdentifiedModel;
 use crate::io::{IoError, Mapping, ReadOptions};
 use crate::loads_scan::LowPassScan;
-use crate::model::{ModelOptions, ModelStructure, Workspace};
+use crate::model::{ModelOptions, ModelStructure, ParamId, Workspace};
 use crate::pipeline::{self, FitOutcome, FitRequest, Holdout, StatsPart};
 use crate::progress::Progress;
 use crate::report::summary::Report;
@@ -486,7 +486,7 @@ impl Results {
         let mut c = DMatrix::zeros(n, n);
         for (a, &i) in mmr.param_index.iter().enumerate() {
             for (b, &j) in mmr.param_index.iter().enumerate() {
-                c[(i, j)] = kappa * mmr.covariance[a * k + b];
+                c[(i.index(), j.index())] = kappa * mmr.covariance[a * k + b];
             }
         }
         c
@@ -513,7 +513,7 @@ impl Results {
         let structure = self.structure();
         let n = fit.samples as f64;
         fit.metrics.map(|m| {
-            let mut params: Vec<usize> = structure
+            let mut params: Vec<ParamId> = structure
                 .axis_columns(m.axis)
                 .map(|j| structure.columns[j].param)
                 .filter(|p| fit.mmr.param_index.contains(p))
@@ -617,7 +617,7 @@ impl Results {
             let mut first = true;
             for j in structure.axis_columns(axis) {
                 let c = &structure.columns[j];
-                let th = theta[c.param];
+                let th = theta[c.param.index()];
                 let sign = if th < 0.0 {
                     "-"
                 } else if first {
@@ -633,7 +633,7 @@ impl Results {
                 line.push_str(&format!(
                     " {sign} {:.5e}*{label} [{}]",
                     th.abs(),
-                    structure.params[c.param].name
+                    structure.param(c.param).name
                 ));
                 first = false;
             }

@@ -110,7 +110,7 @@ fn check_candidate(
     let mut full = theta.clone();
     full.resize(extended.params.len(), 0.0);
     for (&i, &x) in idx.iter().zip(values) {
-        full[i] = x;
+        full[i.index()] = x;
     }
     let (mut err, mut size) = (0.0_f64, 0.0_f64);
     for s in samples(v.rotor_count(), 300) {

@@ -64,8 +64,9 @@ fn per_rotor_ground_effect(d: &Diagnosis) -> &mrsysid::internals::diagnose::Cand
 fn final_ground_effect_scale(d: &Diagnosis) -> (f64, f64) {
     let i = d
         .structure
-        .param_index("ground_effect_scale_per_rotor")
-        .expect("in the final model");
+        .param_id("ground_effect_scale_per_rotor")
+        .expect("in the final model")
+        .index();
     (d.theta[i], d.std[i])
 }
 

@@ -94,7 +94,7 @@ fn relative_errors(
         // ws.output = measured − known terms; the columns must explain it exactly.
         let mut fit = vec![0.0; chunk.len()];
         for j in model.axis_columns(axis) {
-            let th = theta[model.columns[j].param];
+            let th = theta[model.columns[j].param.index()];
             for (f, x) in fit.iter_mut().zip(ws.column(j)) {
                 *f += th * x;
             }
@@ -390,7 +390,7 @@ fn general_planar_terms_are_needed_and_visible() {
     let v = Vehicle::from_rotors(name, random_props(&mut rng), table.clone()).unwrap();
     let blade = random_blade(&mut rng);
     let model = ModelStructure::eq22(&v, ModelOptions::default());
-    assert!(model.param_index("C_Q_mu_muw").is_some());
+    assert!(model.param_id("C_Q_mu_muw").is_some());
     let lumped = blade.lumped_parameters(v.props.rotor_radius);
     let theta: Vec<f64> = model
         .params

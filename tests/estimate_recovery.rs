@@ -26,7 +26,7 @@ fn exact_data_recovers_theta() {
             .ols
             .columns
             .iter()
-            .map(|&c| theta[s.columns[c].param])
+            .map(|&c| theta[s.columns[c].param.index()])
             .collect();
         assert!(max_rel(&a.ols.theta, &expected) < 1e-9, "{}", a.ols.axis);
         // Exact data: R² = 1 to rounding.
@@ -66,7 +66,7 @@ fn noisy_estimates_lie_within_three_sigma() {
     assert_eq!(f.mmr.dof, (n - s.params.len()) as f64);
     assert_eq!(f.mmr.inference_withheld, None);
     for (e, &p) in f.mmr.parameters.iter().zip(&f.mmr.param_index) {
-        let z = (e.estimate - theta[p]) / e.std_error;
+        let z = (e.estimate - theta[p.index()]) / e.std_error;
         assert!(z.abs() < 3.0, "{}: {z}", e.name);
         assert!((e.t - e.estimate / e.std_error).abs() <= 1e-12 * e.t.abs());
     }
@@ -125,7 +125,7 @@ fn monte_carlo_coverage_of_95_percent_intervals() {
         let f = fit(&s, &acc, &FitOptions::default()).unwrap();
         for (e, &p) in f.mmr.parameters.iter().zip(&f.mmr.param_index) {
             total += 1;
-            if (e.estimate - theta[p]).abs() <= e.ci95_half_width {
+            if (e.estimate - theta[p.index()]).abs() <= e.ci95_half_width {
                 covered += 1;
             }
         }

@@ -56,7 +56,7 @@ fn structured_mmr_equals_dense_kronecker_wls() {
     let mut z = DVector::<f64>::zeros(6 * n);
     for (c, col) in s.columns.iter().enumerate() {
         for (t, &x) in ws.column(c).iter().enumerate() {
-            h[(col.axis as usize * n + t, col.param)] += x;
+            h[(col.axis as usize * n + t, col.param.index())] += x;
         }
     }
     for a in Axis::ALL {
@@ -375,11 +375,12 @@ fn ill_conditioned_hover_design_keeps_six_digits() {
     for (i, ci) in s.columns.iter().enumerate() {
         for (j, cj) in s.columns.iter().enumerate() {
             let w = Dd(f.mmr.weight[ci.axis as usize][cj.axis as usize], 0.0);
-            g[ci.param][cj.param] = g[ci.param][cj.param].add(w.mul(gram[i][j]));
+            g[ci.param.index()][cj.param.index()] =
+                g[ci.param.index()][cj.param.index()].add(w.mul(gram[i][j]));
         }
         for a in 0..6 {
             let w = Dd(f.mmr.weight[ci.axis as usize][a], 0.0);
-            b[ci.param] = b[ci.param].add(w.mul(gram[i][p + a]));
+            b[ci.param.index()] = b[ci.param.index()].add(w.mul(gram[i][p + a]));
         }
     }
     let g_diag: Vec<f64> = (0..np).map(|j| g[j][j].0).collect();
@@ -492,7 +493,12 @@ fn unidentifiable_parameters_are_refused_or_dropped() {
     for d in f.identifiability.iter().flat_map(|c| &c.dropped) {
         assert!(!d.aliased_with.contains(&d.name), "{d:?}");
     }
-    let kept: Vec<f64> = f.mmr.param_index.iter().map(|&p| theta[p]).collect();
+    let kept: Vec<f64> = f
+        .mmr
+        .param_index
+        .iter()
+        .map(|&p| theta[p.index()])
+        .collect();
     let got: Vec<f64> = f.mmr.parameters.iter().map(|e| e.estimate).collect();
     assert!(max_rel(&got, &kept) < 1e-9);
 }
@@ -502,7 +508,7 @@ fn selected_columns_equal_accumulating_the_smaller_structure() {
     // Accumulate a structure with an extra parameter, select the base columns, and
     // compare every cross product with accumulating the base structure directly: both
     // are QR factors of the same data, equal up to rounding (1e-12 relative).
-    use mrsysid::internals::model::{Column, Parameter, Signal, term};
+    use mrsysid::internals::model::{Column, ParamId, Parameter, Signal, term};
     let (base, _, samples) = noisy(5, 3000);
     let chunks = chunks(&samples, 4, 1024);
     let mut big = base.clone();
@@ -513,7 +519,7 @@ fn selected_columns_equal_accumulating_the_smaller_structure() {
         },
         vec![Column {
             axis: mrsysid::Axis::Fx,
-            param: 0,
+            param: ParamId::default(),
             label: "u|u|".into(),
             terms: vec![term(1.0, &[Signal::U, Signal::AbsU])],
         }],
@@ -529,7 +535,7 @@ fn selected_columns_equal_accumulating_the_smaller_structure() {
                 .position(|b| {
                     b.axis == c.axis
                         && b.label == c.label
-                        && big.params[b.param].name == base.params[c.param].name
+                        && big.param(b.param).name == base.param(c.param).name
                 })
                 .unwrap()
         })
@@ -560,12 +566,12 @@ fn a_column_of_the_same_shape_on_one_axis_is_dropped_as_aliased() {
         .iter()
         .position(|c| c.axis == Axis::Mx && c.terms.len() == 1)
         .expect("a single-term Mx column");
-    let shared = base.params[base.columns[mx].param].name.clone();
+    let shared = base.param(base.columns[mx].param).name.clone();
     let mut untied = base.clone();
     untied.add_parameter(
         mrsysid::internals::model::Parameter {
             name: format!("{shared}@Mx"),
-            unit: base.params[base.columns[mx].param].unit.clone(),
+            unit: base.param(base.columns[mx].param).unit.clone(),
         },
         vec![base.columns[mx].clone()],
     );
@@ -611,7 +617,7 @@ fn a_column_spanned_by_the_terms_of_others_on_one_axis_is_dropped_as_aliased() {
     let mut offset = base.clone();
     let column = mrsysid::internals::model::Column {
         axis: Axis::Mx,
-        param: 0,
+        param: mrsysid::internals::model::ParamId::default(),
         label: "offset".into(),
         terms,
     };
@@ -629,7 +635,7 @@ fn a_column_spanned_by_the_terms_of_others_on_one_axis_is_dropped_as_aliased() {
     assert_eq!(d.name, "dz (offset)");
     let name = |c: usize| {
         let col = &base.columns[c];
-        format!("{} ({})", base.params[col.param].name, col.label)
+        format!("{} ({})", base.param(col.param).name, col.label)
     };
     assert_eq!(
         d.aliased_with,

@@ -8,7 +8,7 @@ use estimate_common::*;
 use mrsysid::Axis;
 use mrsysid::Workspace;
 use mrsysid::internals::estimate::{FitOptions, evaluate, fit, score_addition};
-use mrsysid::internals::model::{Column, Parameter, Signal, term};
+use mrsysid::internals::model::{Column, ParamId, Parameter, Signal, term};
 use mrsysid::internals::stats::{AccumulateError, Accumulator};
 
 /// θ fitted on one data set, evaluated on an independent one through its accumulator:
@@ -58,7 +58,7 @@ fn candidate_column_is_scored_and_refitted() {
     let mut s = base.clone();
     let column = |label: &str, factors: &[Signal]| Column {
         axis: Axis::Fx,
-        param: 0,
+        param: ParamId::default(),
         label: label.into(),
         terms: vec![term(1.0, factors)],
     };
@@ -72,7 +72,7 @@ fn candidate_column_is_scored_and_refitted() {
     );
     let null = s.add_parameter(unit("C_up"), vec![column("u*p", &[Signal::U, Signal::P])]);
     let acc = accumulate(&s, &chunks(&samples, 4, 1024));
-    let col_of = |p: usize| s.columns.iter().position(|c| c.param == p).unwrap();
+    let col_of = |p: ParamId| s.columns.iter().position(|c| c.param == p).unwrap();
     let fx_base: Vec<usize> = s
         .axis_columns(Axis::Fx)
         .filter(|&c| s.columns[c].param != cubic && s.columns[c].param != null)

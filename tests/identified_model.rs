@@ -104,7 +104,7 @@ fn covariance_round_trips_and_gives_prediction_sigma() {
     m.structure.assemble(&chunk, &mut ws).unwrap();
     let mut x = vec![0.0; n];
     for j in m.structure.axis_columns(Axis::Fz) {
-        x[m.structure.columns[j].param] += ws.column(j)[0];
+        x[m.structure.columns[j].param.index()] += ws.column(j)[0];
     }
     let expect = x
         .iter()
@@ -187,7 +187,7 @@ fn bad_model_files_name_the_file_and_problem() {
 #[test]
 fn added_effect_columns_survive_the_model_file() {
     use mrsysid::Axis;
-    use mrsysid::internals::model::{Column, Parameter, Signal, term};
+    use mrsysid::internals::model::{Column, ParamId, Parameter, Signal, term};
     let m = model();
     let mut s = m.structure.clone();
     s.add_parameter(
@@ -197,7 +197,7 @@ fn added_effect_columns_survive_the_model_file() {
         },
         vec![Column {
             axis: Axis::Fx,
-            param: 0,
+            param: ParamId::default(),
             label: "-rho/2*u|u|".into(),
             terms: vec![term(-0.6125, &[Signal::U, Signal::AbsU])],
         }],
@@ -209,7 +209,7 @@ fn added_effect_columns_survive_the_model_file() {
         },
         vec![Column {
             axis: Axis::Fz,
-            param: 0,
+            param: ParamId::default(),
             label: "T_2".into(),
             terms: vec![term(-1e-6, &[Signal::RotorSpeedSquared(1)])],
         }],

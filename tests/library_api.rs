@@ -295,8 +295,9 @@ fn results_from_memory_match_their_definitions() {
     for p in &params {
         let i = results
             .structure()
-            .param_index(&p.name)
-            .expect("a parameter of the structure");
+            .param_id(&p.name)
+            .expect("a parameter of the structure")
+            .index();
         // σ² is the covariance's diagonal; the white σ is κ^-½ of it; t = θ̂/σ; the
         // 95 % interval is symmetric about θ̂ (relative rounding 1e-12).
         assert!(

@@ -8,7 +8,7 @@
 
 use std::ops::RangeInclusive;
 
-use crate::model::{Column, ModelStructure, Parameter, Term};
+use crate::model::{Column, ModelStructure, ParamId, Parameter, Term};
 use crate::sample::Axis;
 
 /// Which physical effect a candidate stands for.
@@ -276,8 +276,8 @@ impl Candidate {
     }
 
     /// Adds the candidate's parameters and columns to `structure`; returns the new
-    /// parameter indices.
-    pub fn add_to(&self, structure: &mut ModelStructure) -> Vec<usize> {
+    /// parameters.
+    pub fn add_to(&self, structure: &mut ModelStructure) -> Vec<ParamId> {
         self.parameters
             .iter()
             .map(|p| {

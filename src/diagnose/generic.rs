@@ -29,7 +29,9 @@
 //! its parameter reads in the axis unit: the load at one RMS of the monomial.
 
 use super::candidate::{Candidate, CandidateParameter, EffectKind, Role};
-use crate::model::{Column, ModelError, ModelStructure, Parameter, Signal, Workspace, term};
+use crate::model::{
+    Column, ModelError, ModelStructure, ParamId, Parameter, Signal, Workspace, term,
+};
 use crate::sample::{Axis, SampleChunk};
 use crate::util::{dot, map_on_threads};
 
@@ -162,7 +164,7 @@ impl<'d> MonomialBlocks<'d> {
                 for m in block {
                     let column = Column {
                         axis: Axis::Fx,
-                        param: 0,
+                        param: ParamId::default(),
                         label: label(m),
                         terms: vec![term(1.0, m)],
                     };
@@ -389,7 +391,7 @@ impl Screened {
             self.axis.unit(),
             vec![Column {
                 axis: self.axis,
-                param: 0,
+                param: ParamId::default(),
                 label: format!("{}/{:.4e}", self.label, self.rms),
                 terms: vec![term(1.0 / self.rms, &self.factors)],
             }],

@@ -8,7 +8,7 @@
 //! ordinary folds.
 
 use crate::estimate::Folds;
-use crate::model::{Column, ModelStructure, Parameter, Workspace};
+use crate::model::{Column, ModelStructure, ParamId, Parameter, Workspace};
 use crate::sample::{Axis, SampleChunk};
 use crate::stats::{AccumulateError, Accumulator};
 
@@ -36,7 +36,7 @@ impl LocalRegions {
             let Some(a) = &cand.activity else { continue };
             let column = Column {
                 axis: Axis::Fx,
-                param: 0,
+                param: ParamId::default(),
                 label: format!("activity of {}", cand.name),
                 terms: a.terms.clone(),
             };

@@ -6,7 +6,7 @@ use super::effects::{CandidateContext, library};
 use super::generic;
 use super::local::LocalRegions;
 use super::options::DiagnoseOptions;
-use crate::model::{ModelError, ModelStructure};
+use crate::model::{ModelError, ModelStructure, ParamId};
 use crate::sample::SampleChunk;
 
 /// Every candidate of one diagnosis, added to the base structure.
@@ -15,8 +15,8 @@ pub struct CandidateSet {
     pub extended: ModelStructure,
     /// Named candidates first, then the generic-pool survivors.
     pub candidates: Vec<Candidate>,
-    /// Parameter indices in `extended` of each candidate.
-    pub params: Vec<Vec<usize>>,
+    /// The parameters in `extended` of each candidate.
+    pub params: Vec<Vec<ParamId>>,
     /// The candidates confined to part of the envelope, and where they act.
     pub regions: LocalRegions,
 }
@@ -41,7 +41,8 @@ pub fn candidate_set_on_threads(
 ) -> Result<CandidateSet, ModelError> {
     let mut candidates = library(ctx);
     let mut extended = ctx.structure.clone();
-    let mut params: Vec<Vec<usize>> = candidates.iter().map(|c| c.add_to(&mut extended)).collect();
+    let mut params: Vec<Vec<ParamId>> =
+        candidates.iter().map(|c| c.add_to(&mut extended)).collect();
     let screened = match screening_data {
         Some(data) if !data.is_empty() => generic::screen(
             ctx.structure,

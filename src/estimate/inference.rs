@@ -207,7 +207,7 @@ pub fn error_sums(
     Ok(Axis::ALL.map(|axis| {
         let mut fit = vec![0.0; acc.m()];
         for c in structure.axis_columns(axis) {
-            fit[c] = theta[structure.columns[c].param];
+            fit[c] = theta[structure.columns[c].param.index()];
         }
         let zc = acc.output_index(axis);
         let mut resid: Vec<f64> = fit.iter().map(|v| -v).collect();

@@ -17,7 +17,7 @@ use super::identifiability::{
 };
 use super::lstsq::{LeastSquares, SingularValues};
 use super::{EstimateError, FitOptions};
-use crate::model::ModelStructure;
+use crate::model::{ModelStructure, ParamId};
 use crate::stats::Accumulator;
 
 /// How the six outputs were weighted.
@@ -32,8 +32,8 @@ pub enum Weighting {
 /// Result of the weighted solve, before inference.
 pub(crate) struct MmrSolution {
     pub ls: LeastSquares,
-    /// Indices into `structure.params` of the estimated parameters.
-    pub params: Vec<usize>,
+    /// The estimated parameters.
+    pub params: Vec<ParamId>,
     pub conditioning: ProblemConditioning,
     pub weight: [[f64; 6]; 6],
     pub weighting: Weighting,
@@ -97,7 +97,7 @@ pub(crate) fn solve(
             let lik = l[col.axis as usize][k];
             if lik != 0.0 {
                 for (i, rv) in acc.r_column(c).into_iter().enumerate() {
-                    g[(k * m + i, col.param)] += lik * rv;
+                    g[(k * m + i, col.param.index())] += lik * rv;
                 }
             }
         }
@@ -112,7 +112,7 @@ pub(crate) fn solve(
     let names: Vec<String> = structure.params.iter().map(|p| p.name.clone()).collect();
     let cause = |p: usize| {
         let cols: Vec<usize> = (0..structure.columns.len())
-            .filter(|&c| structure.columns[c].param == p)
+            .filter(|&c| structure.columns[c].param.index() == p)
             .collect();
         zero_column_cause(structure, acc, &cols)
     };
@@ -121,7 +121,8 @@ pub(crate) fn solve(
         solve_identifiable("MMR", &g, &rhs, &terms, options, singular_values)?;
     Ok(MmrSolution {
         ls,
-        params,
+        // The design's columns are the parameters.
+        params: params.into_iter().map(ParamId::new).collect(),
         conditioning,
         weight,
         weighting,

@@ -36,7 +36,7 @@ pub(crate) use lstsq::SingularValues;
 pub use mmr::Weighting;
 pub use ols::{AxisOls, axis_ols};
 
-use crate::model::ModelStructure;
+use crate::model::{ModelStructure, ParamId};
 use crate::sample::Axis;
 use crate::stats::Accumulator;
 
@@ -136,8 +136,8 @@ pub struct AxisFit {
 pub struct MmrEstimates {
     /// Estimated parameters, in structure order (dropped ones omitted).
     pub parameters: Vec<ParameterEstimate>,
-    /// Index into `ModelStructure::params` of each estimated parameter.
-    pub param_index: Vec<usize>,
+    /// Each estimated parameter of the structure.
+    pub param_index: Vec<ParamId>,
     /// Full θ over `ModelStructure::params` (0 for dropped parameters), for
     /// [`evaluate`] and prediction.
     pub theta: Vec<f64>,
@@ -241,14 +241,14 @@ pub(crate) fn fit_without_fsoa(
         .iter()
         .enumerate()
         .map(|(j, &p)| {
-            theta[p] = sol.ls.theta[j];
+            theta[p.index()] = sol.ls.theta[j];
             let estimate = sol.ls.theta[j];
             let std_error = sol.ls.xtx_inv[j * k + j].sqrt();
             let t = estimate / std_error;
             let (p_value, t975) = inference::t_test(t, dof);
             ParameterEstimate {
-                name: structure.params[p].name.clone(),
-                unit: structure.params[p].unit.clone(),
+                name: structure.param(p).name.clone(),
+                unit: structure.param(p).unit.clone(),
                 estimate,
                 std_error,
                 t,
@@ -310,11 +310,11 @@ fn residual_covariance(acc: &Accumulator, axes: &[AxisFit]) -> [[f64; 6]; 6] {
     r
 }
 
-/// Names of `params` (indices into `structure.params`), comma-separated.
-fn param_names(structure: &ModelStructure, params: impl IntoIterator<Item = usize>) -> String {
+/// Names of `params`, comma-separated.
+fn param_names(structure: &ModelStructure, params: impl IntoIterator<Item = ParamId>) -> String {
     params
         .into_iter()
-        .map(|p| structure.params[p].name.as_str())
+        .map(|p| structure.param(p).name.as_str())
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -326,7 +326,7 @@ fn param_names(structure: &ModelStructure, params: impl IntoIterator<Item = usiz
 /// zeros).
 fn check_support(structure: &ModelStructure, acc: &Accumulator) -> Result<(), EstimateError> {
     let n_theta = structure.params.len();
-    let all = || param_names(structure, 0..n_theta);
+    let all = || param_names(structure, structure.param_ids());
     match acc.distinct_rows() {
         Some(0) => {
             return Err(EstimateError::TooFewSamples {
@@ -368,7 +368,8 @@ fn check_support(structure: &ModelStructure, acc: &Accumulator) -> Result<(), Es
             .axis_columns(axis)
             .any(|c| acc.min(c) != acc.max(c));
         if lo == hi && excited {
-            let only_here: Vec<usize> = (0..n_theta)
+            let only_here: Vec<ParamId> = structure
+                .param_ids()
                 .filter(|&p| {
                     let mut cols = structure.columns.iter().filter(|c| c.param == p);
                     cols.clone().next().is_some() && cols.all(|c| c.axis == axis)

@@ -56,7 +56,7 @@ impl AxisOls {
 /// Term name used in reports: `param (label)`.
 pub(crate) fn term_name(structure: &ModelStructure, column: usize) -> String {
     let c = &structure.columns[column];
-    format!("{} ({})", structure.params[c.param].name, c.label)
+    format!("{} ({})", structure.param(c.param).name, c.label)
 }
 
 /// For each of the columns `cols` (one axis), the others that span it by construction:

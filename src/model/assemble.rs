@@ -117,7 +117,9 @@ impl ModelStructure {
 
 #[cfg(test)]
 mod tests {
-    use crate::model::{Column, ModelOptions, ModelStructure, Parameter, Signal, Workspace, term};
+    use crate::model::{
+        Column, ModelOptions, ModelStructure, ParamId, Parameter, Signal, Workspace, term,
+    };
     use crate::sample::{Axis, Sample, SampleChunk};
 
     /// Three-factor terms are summed in one pass with the products of the pairwise fold
@@ -135,7 +137,7 @@ mod tests {
             },
             vec![Column {
                 axis: Axis::Fz,
-                param: 0,
+                param: ParamId::default(),
                 label: "u*v*w + 3 p*q*W1".into(),
                 terms: vec![term(0.7, &[U, V, W]), term(3.0, &[P, Q, RotorSpeed(0)])],
             }],

@@ -279,7 +279,8 @@ fn body_to_ned(q: &[Vec<f64>; 4], k: usize) -> [[f64; 3]; 3] {
 #[cfg(test)]
 mod tests {
     use crate::model::{
-        Column, ModelError, ModelOptions, ModelStructure, Parameter, Signal, Workspace, term,
+        Column, ModelError, ModelOptions, ModelStructure, ParamId, Parameter, Signal, Workspace,
+        term,
     };
     use crate::sample::{Axis, Sample, SampleChunk};
 
@@ -290,7 +291,7 @@ mod tests {
         let mut s = ModelStructure::eq22(&v, ModelOptions::default());
         let extra = |axis, label: &str, terms| Column {
             axis,
-            param: 0,
+            param: ParamId::default(),
             label: label.into(),
             terms,
         };

@@ -84,7 +84,7 @@ mod workspace;
 pub use local_effects::ground_effect_factor;
 pub use options::{InflowCorrection, ModelOptions, RotorInertiaTerms};
 pub(crate) use reuse::Reuse;
-pub use signals::{Column, Parameter, Signal, Term, term};
+pub use signals::{Column, ParamId, Parameter, Signal, Term, term};
 pub use structure::{ModelError, ModelStructure};
 pub use workspace::Workspace;
 

@@ -46,7 +46,7 @@ impl ModelStructure {
                 .map(|(z, c)| z - c)
                 .collect();
             for j in self.axis_columns(axis) {
-                let th = theta[self.columns[j].param];
+                let th = theta[self.columns[j].param.index()];
                 y.iter_mut()
                     .zip(ws.column(j))
                     .for_each(|(o, x)| *o += th * x);

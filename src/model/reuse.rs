@@ -126,7 +126,7 @@ fn proportional(run: &[Term], base: &[Term], signal: Option<Signal>) -> Option<f
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{ModelOptions, ModelStructure, Parameter, Workspace, term};
+    use crate::model::{ModelOptions, ModelStructure, ParamId, Parameter, Workspace, term};
     use crate::sample::{Axis, Sample, SampleChunk};
 
     /// A column made of an earlier column's terms times a signal (a rotor's thrust times
@@ -141,7 +141,7 @@ mod tests {
         let mut s = ModelStructure::eq22(&v, ModelOptions::default());
         let column = |label: &str, terms: Vec<Term>| Column {
             axis: Axis::Fz,
-            param: 0,
+            param: ParamId::default(),
             label: label.into(),
             terms,
         };

@@ -145,14 +145,46 @@ pub fn term(coef: f64, factors: &[Signal]) -> Term {
     }
 }
 
+/// A parameter of a [`super::ModelStructure`]: its position in
+/// [`super::ModelStructure::params`], and of its value in θ. Written as that position in
+/// model files.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Default,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    serde::Serialize,
+    serde::Deserialize,
+)]
+#[serde(transparent)]
+pub struct ParamId(usize);
+
+impl ParamId {
+    /// The parameter at `index` of a structure's parameter list.
+    pub(crate) fn new(index: usize) -> Self {
+        Self(index)
+    }
+
+    /// Its position in the structure's parameter list and in θ.
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
 /// A regressor column: which axis, which parameter it multiplies, and its terms.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Column {
     /// Output axis.
     pub axis: Axis,
-    /// Index into [`super::ModelStructure::params`].
-    pub param: usize,
+    /// The parameter the column multiplies (set by
+    /// [`super::ModelStructure::add_parameter`] for a column added with a parameter).
+    pub param: ParamId,
     /// ASCII description of the regressor, after Eq. 22 (e.g. `u*dt`).
     pub label: String,
     /// Terms summed into the column.

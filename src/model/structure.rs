@@ -3,7 +3,7 @@
 //! the structure's edits (candidate parameters added, parameters or columns kept).
 
 use super::evaluate::SignalConstants;
-use super::{Column, ModelOptions, Parameter, Signal, Term};
+use super::{Column, ModelOptions, ParamId, Parameter, Signal, Term};
 use crate::sample::{Axis, SampleChunk};
 
 /// Why a chunk could not be assembled.
@@ -78,7 +78,7 @@ pub struct ModelStructure {
 }
 
 impl ModelStructure {
-    /// A structure of `params` and `columns` (whose `param` indices point into `params`)
+    /// A structure of `params` and `columns` (whose `param` ids point into `params`)
     /// with `known` terms, for a vehicle of `rotor_count` rotors whose signals use
     /// `constants`.
     pub(super) fn from_parts(
@@ -102,9 +102,22 @@ impl ModelStructure {
         s
     }
 
-    /// Index of the parameter called `name`.
-    pub fn param_index(&self, name: &str) -> Option<usize> {
-        self.params.iter().position(|p| p.name == name)
+    /// The parameter called `name`.
+    pub fn param_id(&self, name: &str) -> Option<ParamId> {
+        self.params
+            .iter()
+            .position(|p| p.name == name)
+            .map(ParamId::new)
+    }
+
+    /// Every parameter, in [`ModelStructure::params`] order.
+    pub fn param_ids(&self) -> impl Iterator<Item = ParamId> + use<> {
+        (0..self.params.len()).map(ParamId::new)
+    }
+
+    /// The parameter `id`.
+    pub fn param(&self, id: ParamId) -> &Parameter {
+        &self.params[id.index()]
     }
 
     /// Indices (into [`ModelStructure::columns`]) of the columns of `axis`.
@@ -156,23 +169,23 @@ impl ModelStructure {
         s
     }
 
-    /// Appends a parameter with its columns (e.g. a candidate effect); returns its index.
-    /// Columns' `param` fields are overwritten with the new index.
-    pub fn add_parameter(&mut self, param: Parameter, mut columns: Vec<Column>) -> usize {
-        let idx = self.params.len();
+    /// Appends a parameter with its columns (e.g. a candidate effect); returns it.
+    /// Columns' `param` fields are overwritten with the new parameter.
+    pub fn add_parameter(&mut self, param: Parameter, mut columns: Vec<Column>) -> ParamId {
+        let id = ParamId::new(self.params.len());
         self.params.push(param);
         for c in &mut columns {
-            c.param = idx;
+            c.param = id;
         }
         self.columns.extend(columns);
         self.columns.sort_by_key(|c| c.axis);
         self.required = self.collect_required_signals();
-        idx
+        id
     }
 
-    /// The structure restricted to parameters `keep` (indices, in the order given) and
-    /// their columns; also returns, for each kept column, its index in `self.columns`.
-    pub fn subset(&self, keep: &[usize]) -> (ModelStructure, Vec<usize>) {
+    /// The structure restricted to parameters `keep` (in the order given) and their
+    /// columns; also returns, for each kept column, its index in `self.columns`.
+    pub fn subset(&self, keep: &[ParamId]) -> (ModelStructure, Vec<usize>) {
         let cols: Vec<usize> = (0..self.columns.len())
             .filter(|&j| keep.contains(&self.columns[j].param))
             .collect();
@@ -180,19 +193,17 @@ impl ModelStructure {
             .iter()
             .map(|&j| {
                 let mut c = self.columns[j].clone();
-                c.param = keep
-                    .iter()
-                    .position(|&p| p == c.param)
-                    .expect("kept parameter");
+                let at = keep.iter().position(|&p| p == c.param);
+                c.param = ParamId::new(at.expect("kept parameter"));
                 c
             })
             .collect();
-        let params = keep.iter().map(|&p| self.params[p].clone()).collect();
+        let params = keep.iter().map(|&p| self.param(p).clone()).collect();
         (self.with_columns(params, columns), cols)
     }
 
     /// This structure's vehicle, options and known terms with `params` and `columns`
-    /// (whose `param` indices point into `params`) instead of its own.
+    /// (whose `param` ids point into `params`) instead of its own.
     fn with_columns(&self, params: Vec<Parameter>, columns: Vec<Column>) -> ModelStructure {
         Self::from_parts(
             params,
@@ -218,18 +229,19 @@ impl ModelStructure {
     /// The structure restricted to columns `cols` (indices into `self.columns`,
     /// ascending) and the parameters they use, in this structure's parameter order.
     pub fn select_columns(&self, cols: &[usize]) -> ModelStructure {
-        let mut used: Vec<usize> = cols.iter().map(|&j| self.columns[j].param).collect();
+        let mut used: Vec<ParamId> = cols.iter().map(|&j| self.columns[j].param).collect();
         used.sort_unstable();
         used.dedup();
         let columns = cols
             .iter()
             .map(|&j| {
                 let mut c = self.columns[j].clone();
-                c.param = used.binary_search(&c.param).expect("kept parameter");
+                let at = used.binary_search(&c.param);
+                c.param = ParamId::new(at.expect("kept parameter"));
                 c
             })
             .collect();
-        let params = used.iter().map(|&p| self.params[p].clone()).collect();
+        let params = used.iter().map(|&p| self.param(p).clone()).collect();
         self.with_columns(params, columns)
     }
 

@@ -74,8 +74,8 @@ impl PlotSeries {
         for effect in &d.effects_added {
             let mut theta = d.theta.clone();
             for p in &effect.parameters {
-                if let Some(j) = d.structure.param_index(&p.name) {
-                    theta[j] = 0.0;
+                if let Some(j) = d.structure.param_id(&p.name) {
+                    theta[j.index()] = 0.0;
                 }
             }
             let without = d.structure.predict_assembled(&theta, &self.samples, &ws);

@@ -8,14 +8,14 @@ use super::{FitRequest, PlotSeries};
 use crate::diagnose::Candidate;
 use crate::diagnose::local::{ActivityParts, LocalRegions};
 use crate::estimate::ResidualPass;
-use crate::model::{ModelStructure, Reuse};
+use crate::model::{ModelStructure, ParamId, Reuse};
 use crate::stats::Accumulator;
 
-/// Candidate effects added to the base structure, with their parameter indices.
+/// Candidate effects added to the base structure, with their parameters.
 pub(super) struct Extended {
     pub(super) structure: ModelStructure,
     pub(super) candidates: Vec<Candidate>,
-    pub(super) params: Vec<Vec<usize>>,
+    pub(super) params: Vec<Vec<ParamId>>,
     pub(super) regions: LocalRegions,
     /// The columns its accumulators store, and how they are assembled from each other.
     pub(super) stored: Vec<bool>,

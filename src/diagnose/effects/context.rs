@@ -5,7 +5,7 @@
 //! estimates θ̂), so a parameter reads directly as a fraction ("rotor 3 thrust −7.9 %")
 //! or a physical quantity (m, m², s).
 
-use crate::model::{Column, ModelStructure, Signal, Term, term};
+use crate::model::{Column, ModelStructure, ParamId, Signal, Term, term};
 use crate::sample::Axis;
 use crate::vehicle::{Rotor, Vehicle};
 
@@ -70,8 +70,8 @@ impl CandidateContext<'_> {
     /// without that term, e.g. no linear V_h terms: its contribution is then zero).
     pub(super) fn theta(&self, name: &str) -> f64 {
         self.structure
-            .param_index(name)
-            .map_or(0.0, |i| self.theta[i])
+            .param_id(name)
+            .map_or(0.0, |p| self.theta[p.index()])
     }
 
     /// ρπR², kg/m.
@@ -253,7 +253,7 @@ impl CandidateContext<'_> {
             .axis_columns(axis)
             .flat_map(|j| {
                 let c = &self.structure.columns[j];
-                let th = self.theta[c.param];
+                let th = self.theta[c.param.index()];
                 c.terms.iter().map(move |t| Term {
                     coef: t.coef * th * scale,
                     factors: t.factors.clone(),
@@ -279,7 +279,7 @@ pub(super) fn rotor_signals(i: usize) -> (Signal, Signal, Signal) {
 pub(super) fn column(axis: Axis, label: &str, terms: Vec<Term>) -> Column {
     Column {
         axis,
-        param: 0,
+        param: ParamId::default(),
         label: label.to_string(),
         terms,
     }

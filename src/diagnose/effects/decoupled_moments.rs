@@ -21,12 +21,12 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
     let s = ctx.structure;
     let is_moment = |a: Axis| (a as usize) >= 3;
     let mut out = Vec::new();
-    for p in 0..s.params.len() {
+    for p in s.param_ids() {
         let columns: Vec<&Column> = s.columns.iter().filter(|c| c.param == p).collect();
         if !columns.iter().any(|c| !is_moment(c.axis)) {
             continue;
         }
-        let name = &s.params[p].name;
+        let name = &s.param(p).name;
         for axis in [Axis::Mx, Axis::My, Axis::Mz] {
             let cols: Vec<Column> = columns
                 .iter()
@@ -37,7 +37,7 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
                 continue;
             }
             let freed =
-                CandidateParameter::new(format!("{name}@{}", axis.name()), &s.params[p].unit, cols)
+                CandidateParameter::new(format!("{name}@{}", axis.name()), &s.param(p).unit, cols)
                     .read_as(Reading::MomentMinusForce);
             out.push(Candidate::new(
                 Kind::DecoupledMoments,

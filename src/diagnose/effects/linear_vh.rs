@@ -22,7 +22,7 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
     let parameters = ["C_H_mub_mu", "C_T_mu", "C_Q_mu"]
         .iter()
         .filter_map(|name| {
-            let p = full.param_index(name)?;
+            let p = full.param_id(name)?;
             let cols = full
                 .columns
                 .iter()

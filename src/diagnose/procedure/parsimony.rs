@@ -8,6 +8,7 @@ use super::outcome::Unsupported;
 use super::trial::{CandidateStatistics, Trial, held_out, trial};
 use crate::diagnose::options::DiagnoseOptions;
 use crate::estimate::{CrossValidation, FitOptions};
+use crate::model::ParamId;
 use crate::sample::Axis;
 use crate::util::map_on_threads;
 
@@ -54,7 +55,7 @@ pub(super) fn prune(
         let column = |j: usize| &stats.extended.columns[j];
         // Control-effectiveness terms stay: a model without them is no use for control
         // design, whatever their share of the held-out variance.
-        let mut terms: Vec<(usize, Axis)> = kept
+        let mut terms: Vec<(ParamId, Axis)> = kept
             .iter()
             .filter(|&&j| !stats.extended.is_control_effectiveness(j))
             .map(|&j| (column(j).param, column(j).axis))
@@ -65,7 +66,7 @@ pub(super) fn prune(
             break;
         }
         // Each removal scored on the folds only; the one chosen is then fitted in full.
-        let mut removals: Vec<((usize, Axis), f64, Vec<usize>)> =
+        let mut removals: Vec<((ParamId, Axis), f64, Vec<usize>)> =
             map_on_threads(&terms, threads, |&term| {
                 let without: Vec<usize> = kept
                     .iter()
@@ -103,7 +104,7 @@ pub(super) fn prune(
             break;
         };
         out.push(Unsupported {
-            name: format!("{} on {axis}", stats.extended.params[param].name),
+            name: format!("{} on {axis}", stats.extended.param(param).name),
             score_change: score - best,
         });
         best = best.min(score);

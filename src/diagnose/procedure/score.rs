@@ -7,6 +7,7 @@ use super::state::Search;
 use super::trial::{Trial, gains, held_out_lr, joint_p, required_lr, trial};
 use crate::diagnose::local::LocalFolds;
 use crate::estimate::{self, CrossValidation};
+use crate::model::ParamId;
 
 /// Validation gain used to rank accepted candidates of one group: a named hypothesis's
 /// gain counts `1 + margin` times ([`crate::diagnose::DiagnoseOptions::unspecific_margin`]),
@@ -74,26 +75,28 @@ pub(super) fn score(
         }
     };
     // The trial keeps the parameters its columns use, in their order in `extended`.
-    let mut used: Vec<usize> = t
+    let mut used: Vec<ParamId> = t
         .columns
         .iter()
         .map(|&j| stats.extended.columns[j].param)
         .collect();
     used.sort_unstable();
     used.dedup();
-    let own: Vec<usize> = own_params
+    // The same parameters in the trial's structure.
+    let own: Vec<ParamId> = own_params
         .iter()
         .map(|p| used.binary_search(p).expect("candidate parameter in trial"))
+        .map(ParamId::new)
         .collect();
     s.parameters = own
         .iter()
         .zip(&cand.parameters)
-        .map(|(&i, defined)| EffectParameter {
-            name: t.structure.params[i].name.clone(),
-            estimate: t.fit.mmr.theta[i],
-            std: t.std[i],
-            unit: t.structure.params[i].unit.clone(),
-            p: t.p[i],
+        .map(|(&p, defined)| EffectParameter {
+            name: t.structure.param(p).name.clone(),
+            estimate: t.fit.mmr.theta[p.index()],
+            std: t.std[p.index()],
+            unit: t.structure.param(p).unit.clone(),
+            p: t.p[p.index()],
             reading: defined.reading,
         })
         .collect();

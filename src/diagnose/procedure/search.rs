@@ -13,6 +13,7 @@ use super::trial::{CandidateStatistics, Trial, trial};
 use crate::diagnose::candidate::Role;
 use crate::diagnose::options::DiagnoseOptions;
 use crate::estimate::{self, CrossValidation, FitOptions, SingularValues};
+use crate::model::ParamId;
 use crate::util::map_on_threads;
 
 /// Runs the procedure on accumulated candidate statistics.
@@ -34,7 +35,7 @@ pub fn diagnose_on_threads(
     threads: usize,
 ) -> Result<Diagnosis, DiagnoseError> {
     let inflation = options.variance_inflation;
-    let kept: Vec<usize> = stats.columns_of(|p| p < stats.base_params);
+    let kept: Vec<usize> = stats.columns_of(|p| p.index() < stats.base_params);
     let base = trial(stats, &kept, fit_options, inflation)?;
     let mut search = Search {
         stats,
@@ -143,7 +144,7 @@ fn named_only(
     fit_options: &FitOptions,
     inflation: f64,
 ) -> Result<Option<[crate::estimate::AxisMetrics; 6]>, DiagnoseError> {
-    let unspecific: Vec<usize> = in_model
+    let unspecific: Vec<ParamId> = in_model
         .iter()
         .filter(|(c, _, _)| stats.candidates[*c].role.is_unspecific())
         .flat_map(|(c, _, _)| stats.candidate_params[*c].iter().copied())

@@ -9,7 +9,7 @@ use crate::diagnose::local::LocalFolds;
 use crate::estimate::{
     self, CrossValidation, EstimateError, Fit, FitOptions, Folds, SingularValues,
 };
-use crate::model::ModelStructure;
+use crate::model::{ModelStructure, ParamId};
 use crate::stats::Accumulator;
 /// Statistics of the base structure extended by every candidate.
 pub struct CandidateStatistics<'a> {
@@ -17,8 +17,8 @@ pub struct CandidateStatistics<'a> {
     pub extended: &'a ModelStructure,
     /// The candidates, in the order they were added to `extended`.
     pub candidates: &'a [Candidate],
-    /// Parameter indices in `extended` of each candidate.
-    pub candidate_params: &'a [Vec<usize>],
+    /// The parameters in `extended` of each candidate.
+    pub candidate_params: &'a [Vec<ParamId>],
     /// Number of base parameters (the first ones of `extended`).
     pub base_params: usize,
     /// Statistics of all fit data over `extended` (the estimates).
@@ -33,7 +33,7 @@ pub struct CandidateStatistics<'a> {
 
 impl CandidateStatistics<'_> {
     /// Indices of the columns of `extended` whose parameter satisfies `keep`, ascending.
-    pub(super) fn columns_of(&self, keep: impl Fn(usize) -> bool) -> Vec<usize> {
+    pub(super) fn columns_of(&self, keep: impl Fn(ParamId) -> bool) -> Vec<usize> {
         (0..self.extended.columns.len())
             .filter(|&j| keep(self.extended.columns[j].param))
             .collect()
@@ -78,6 +78,7 @@ pub(super) fn trial(
     let mut p = vec![1.0; structure.params.len()];
     let inflation = inflation.max(1.0).sqrt();
     for (est, &i) in fit.mmr.parameters.iter().zip(&fit.mmr.param_index) {
+        let i = i.index();
         std[i] = est.std_error * inflation;
         p[i] = crate::estimate::inference::t_test(est.estimate / std[i], fit.mmr.dof).0;
     }
@@ -102,13 +103,13 @@ pub(super) fn held_out(
     estimate::cross_validate(structure, &stats.folds.select(columns), options)
 }
 
-/// P-value of the Wald test that the parameters `own` (indices into the trial's
-/// structure) are all zero: W = θᵀ(κΣ)⁻¹θ against χ² with one degree of freedom per
+/// P-value of the Wald test that the parameters `own` (of the trial's structure) are
+/// all zero: W = θᵀ(κΣ)⁻¹θ against χ² with one degree of freedom per
 /// estimated parameter, κ the coloured-residual variance inflation. A joint test, so a
 /// candidate of several correlated parameters is not penalised for their correlation
 /// (each one's t can be small while together they explain much). 1 when none of them
 /// could be estimated.
-pub(super) fn joint_p(t: &Trial, own: &[usize], inflation: f64) -> f64 {
+pub(super) fn joint_p(t: &Trial, own: &[ParamId], inflation: f64) -> f64 {
     let at: Vec<usize> = own
         .iter()
         .filter_map(|p| t.fit.mmr.param_index.iter().position(|e| e == p))
@@ -116,7 +117,10 @@ pub(super) fn joint_p(t: &Trial, own: &[usize], inflation: f64) -> f64 {
     let k = at.len();
     let mmr = &t.fit.mmr;
     let n = mmr.param_index.len();
-    let theta: Vec<f64> = at.iter().map(|&i| mmr.theta[mmr.param_index[i]]).collect();
+    let theta: Vec<f64> = at
+        .iter()
+        .map(|&i| mmr.theta[mmr.param_index[i].index()])
+        .collect();
     let cov: Vec<f64> = at
         .iter()
         .flat_map(|&i| at.iter().map(move |&j| (i, j)))

@@ -10,7 +10,7 @@ use super::math::{add_lag_products, quadratic_diagonal, sandwich6};
 use super::scores::normal_probability_correlation;
 use super::{AxisResiduals, ColouredStdError, DiagnosticOptions, Histogram, ResidualDiagnostics};
 use crate::estimate::Fit;
-use crate::model::{ModelStructure, Workspace};
+use crate::model::{ModelStructure, ParamId, Workspace};
 use crate::sample::{Axis, SampleChunk};
 use crate::stats::AccumulateError;
 
@@ -35,7 +35,7 @@ pub struct ResidualPass {
     prediction: Mat<f64>,
     weight: [[f64; 6]; 6],
     covariance: Vec<f64>,
-    param_index: Vec<usize>,
+    param_index: Vec<ParamId>,
     names: Vec<String>,
     white: Vec<f64>,
     ols: Vec<OlsModel>,
@@ -310,7 +310,7 @@ impl ResidualPass {
         let np = self.param_index.len();
         let mut pos = vec![usize::MAX; self.structure.params.len()];
         for (j, &p) in self.param_index.iter().enumerate() {
-            pos[p] = j;
+            pos[p.index()] = j;
         }
         let cols = &self.structure.columns;
         let mut middle = vec![0.0; np * np];
@@ -323,12 +323,12 @@ impl ResidualPass {
             }
             let m = sandwich6(&self.weight, &gamma);
             for (i, ci) in cols.iter().enumerate() {
-                let pi = pos[ci.param];
+                let pi = pos[ci.param.index()];
                 if pi == usize::MAX {
                     continue;
                 }
                 for (j, cj) in cols.iter().enumerate() {
-                    let pj = pos[cj.param];
+                    let pj = pos[cj.param.index()];
                     if pj == usize::MAX {
                         continue;
                     }
@@ -448,7 +448,7 @@ impl ResidualPass {
 fn prediction_coefficients(structure: &ModelStructure, fit: &Fit) -> Mat<f64> {
     let mut m = Mat::zeros(structure.columns.len(), VW);
     for (c, col) in structure.columns.iter().enumerate() {
-        m[(c, col.axis as usize)] = fit.mmr.theta[col.param];
+        m[(c, col.axis as usize)] = fit.mmr.theta[col.param.index()];
     }
     for (a, axis) in fit.axes.iter().enumerate() {
         for (&c, &th) in axis.ols.columns.iter().zip(&axis.ols.theta) {

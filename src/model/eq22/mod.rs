@@ -7,8 +7,8 @@ mod moments;
 
 use super::evaluate::SignalConstants;
 use super::{
-    Column, InflowCorrection, ModelOptions, ModelStructure, Parameter, RotorInertiaTerms, Signal,
-    Term, term,
+    Column, InflowCorrection, ModelOptions, ModelStructure, ParamId, Parameter, RotorInertiaTerms,
+    Signal, Term, term,
 };
 use crate::sample::Axis;
 use crate::vehicle::{ConfigurationClass, Vehicle};
@@ -40,15 +40,16 @@ struct Builder {
 }
 
 impl Builder {
-    fn param(&mut self, name: &str, unit: &str) -> usize {
+    /// The parameter `name`, added (with `unit`) at its first column.
+    fn param(&mut self, name: &str, unit: &str) -> ParamId {
         if let Some(i) = self.params.iter().position(|p| p.name == name) {
-            return i;
+            return ParamId::new(i);
         }
         self.params.push(Parameter {
             name: name.into(),
             unit: unit.into(),
         });
-        self.params.len() - 1
+        ParamId::new(self.params.len() - 1)
     }
 
     fn col(&mut self, axis: Axis, param: &str, label: &str, terms: Vec<Term>) {
@@ -101,15 +102,16 @@ impl ModelStructure {
         let known = rotor_inertia_terms(&mut b, options, props.rotor_inertia);
         b.columns.sort_by_key(|col| col.axis);
         // Parameters in order of first appearance by axis, as in Table 5.
-        let mut order: Vec<usize> = Vec::new();
+        let mut order: Vec<ParamId> = Vec::new();
         for col in &b.columns {
             if !order.contains(&col.param) {
                 order.push(col.param);
             }
         }
-        let params = order.iter().map(|&i| b.params[i].clone()).collect();
+        let params = order.iter().map(|&i| b.params[i.index()].clone()).collect();
         for col in &mut b.columns {
-            col.param = order.iter().position(|&i| i == col.param).expect("present");
+            let at = order.iter().position(|&i| i == col.param);
+            col.param = ParamId::new(at.expect("present"));
         }
         let constants = SignalConstants::of(vehicle, c.tiny);
         Self::from_parts(
