@@ -12,6 +12,7 @@
 use std::collections::VecDeque;
 
 use super::error::{ErrorKind, IoError, Location, field, key};
+use super::field_path::FieldPathError;
 use super::mapping::Mapping;
 use super::row_source::RowSource;
 use super::summary::Dropout;
@@ -105,7 +106,7 @@ pub fn topic_time<T>(
     mapping: &Mapping,
     topic: &str,
     file: &str,
-    parse_path: impl Fn(&str) -> Result<T, String>,
+    parse_path: impl Fn(&str) -> Result<T, FieldPathError>,
 ) -> Result<Option<(T, f64)>, IoError> {
     let Some(tt) = mapping.mcap.topic_time.get(topic) else {
         return Ok(None);
@@ -118,7 +119,7 @@ pub fn topic_time<T>(
             ErrorKind::Mapping(m),
         )
     };
-    let path = parse_path(&tt.field).map_err(bad)?;
+    let path = parse_path(&tt.field).map_err(|e| bad(e.to_string()))?;
     let factor = match &tt.unit {
         Some(u) => {
             unit_for(u, None, Dimension::Time, "time")

@@ -89,12 +89,12 @@ impl McapSource {
         for slot in 0..layout.len() {
             let name = layout.topic(slot).unwrap_or_default().to_string();
             let field_name = layout.source_name(slot).to_string();
-            let steps = parse_path(&field_name).map_err(|m| {
+            let steps = parse_path(&field_name).map_err(|e| {
                 IoError::new(
                     file,
                     Location::File,
                     field(&format!("{name}.{field_name}")),
-                    ErrorKind::Mapping(m),
+                    ErrorKind::Mapping(e.to_string()),
                 )
             })?;
             let idx = match topics.iter().position(|t| t.name == name) {
@@ -120,7 +120,7 @@ impl McapSource {
                         file,
                         Location::File,
                         super::error::key("time"),
-                        ErrorKind::Mapping(e),
+                        ErrorKind::Mapping(e.to_string()),
                     )
                 })?;
                 Some((steps, mapping.factor(Signal::Time)))

@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use super::super::field_path::{self, Step, Style};
+use super::super::field_path::{self, FieldPathError, Step, Style};
 use super::super::scalar::Scalar;
 use super::MAX_NESTING;
 
@@ -77,7 +77,7 @@ pub fn parse_format(text: &str) -> Result<(String, Vec<FieldDef>), String> {
 }
 
 /// Parses a ULog field path `a.b[2].c`.
-pub(super) fn parse_path(path: &str) -> Result<Vec<Step>, String> {
+pub(super) fn parse_path(path: &str) -> Result<Vec<Step>, FieldPathError> {
     field_path::parse(path, Style::Ulog)
 }
 
@@ -140,7 +140,7 @@ impl Formats {
 
     /// Byte offset and scalar type of `path` inside a message of format `format`.
     pub fn locate(&self, format: &str, path: &str) -> Result<(usize, Scalar), String> {
-        let steps = parse_path(path)?;
+        let steps = parse_path(path).map_err(|e| e.to_string())?;
         let mut ty = format.to_string();
         let mut offset = 0usize;
         let mut i = 0;

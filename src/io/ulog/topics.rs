@@ -54,12 +54,12 @@ pub(super) fn mapped_topics(
     for slot in 0..layout.len() {
         let topic_key = layout.topic(slot).unwrap_or_default().to_string();
         let path = layout.source_name(slot).to_string();
-        parse_path(&path).map_err(|m| {
+        parse_path(&path).map_err(|e| {
             IoError::new(
                 file,
                 Location::File,
                 field(&format!("{topic_key}.{path}")),
-                ErrorKind::Mapping(m),
+                ErrorKind::Mapping(e.to_string()),
             )
         })?;
         let idx = match topics.iter().position(|t| t.key == topic_key) {
