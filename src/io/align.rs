@@ -123,7 +123,7 @@ pub fn topic_time<T>(
     let factor = match &tt.unit {
         Some(u) => {
             unit_for(u, None, Dimension::Time, "time")
-                .map_err(bad)?
+                .map_err(|e| bad(e.to_string()))?
                 .to_si
         }
         None => 1.0,

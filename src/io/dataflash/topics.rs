@@ -8,7 +8,7 @@ use super::super::error::{ErrorKind, IoError, Location, field, key};
 use super::super::mapping::{Mapping, Signal};
 use super::super::scalar::Scalar;
 use super::super::slots::SlotLayout;
-use super::super::units::unit_for;
+use super::super::units::{UnitError, unit_for};
 use super::format::{Format, Kind, UnitTables};
 
 /// A numeric field located in a message body: offset, type and factor to the value
@@ -182,7 +182,8 @@ impl Topic {
             let map = mapping.get(signal);
             let own_unit = map.is_some_and(|m| m.unit.is_some() || m.actuator.is_some());
             let log_factor = match format.unit(k, tables) {
-                Some(u) if !own_unit => log_unit_factor(u, signal).map_err(|m| err(label, m))?,
+                Some(u) if !own_unit => log_unit_factor(u, signal)
+                    .map_err(|e| err(label, format!("the log's unit of this field: {e}")))?,
                 _ => 1.0,
             };
             fields.push((format.fields[k].offset, s, factor * log_factor));
@@ -198,14 +199,14 @@ impl Topic {
 /// The factor to SI of a log unit name (`UNIT` text: `rpm`, `deg/s`, `m/s/s`) for
 /// `signal`: 1 for names that are no unit of the crate (`instance`, `UNKNOWN`, ``); an
 /// error for a unit of another dimension.
-fn log_unit_factor(unit: &str, signal: Signal) -> Result<f64, String> {
+fn log_unit_factor(unit: &str, signal: Signal) -> Result<f64, UnitError> {
     if unit.is_empty() {
         return Ok(1.0);
     }
     let name = unit.replace("/s/s", "/s^2");
     match unit_for(&name, None, signal.dimension(), signal.key()) {
         Ok(u) => Ok(u.to_si),
-        Err(m) if m.contains("unknown unit") => Ok(1.0),
-        Err(m) => Err(format!("the log's unit of this field: {m}")),
+        Err(UnitError::Unknown { .. }) => Ok(1.0),
+        Err(e) => Err(e),
     }
 }
