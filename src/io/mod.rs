@@ -79,6 +79,8 @@ pub const MAX_ROTORS: usize = 16;
 /// message decoded by it into the JSON value the field paths address. Reading a log
 /// needs neither ([`open_log`] does it); they are here for those checks only.
 pub mod internals {
-    pub use super::cdr::decode as decode_cdr;
-    pub use super::ros2msg::{Schema as Ros2Schema, parse_schema as parse_ros2_schema};
+    pub use super::cdr::{CdrError, decode as decode_cdr};
+    pub use super::ros2msg::{
+        Schema as Ros2Schema, SchemaError as Ros2SchemaError, parse_schema as parse_ros2_schema,
+    };
 }

@@ -260,7 +260,7 @@ impl McapSource {
                 let text = std::str::from_utf8(text)
                     .map_err(|_| fail("schema text is not UTF-8".into()))?;
                 let schema = super::ros2msg::parse_schema(name, text)
-                    .map_err(|m| fail(format!("schema {name}: {m}")))?;
+                    .map_err(|e| fail(format!("schema {name}: {e}")))?;
                 Ok(Decoder::Cdr(Box::new(schema)))
             }
             other => Err(fail(format!(
@@ -279,11 +279,11 @@ impl McapSource {
         let loc = Location::Record(index);
         let name = self.topics[topic].name.clone();
         let value: Value = match &self.topics[topic].decoder {
-            Decoder::Cdr(schema) => super::cdr::decode(schema, data).map_err(|m| {
+            Decoder::Cdr(schema) => super::cdr::decode(schema, data).map_err(|e| {
                 self.err(
                     loc,
                     field(&name),
-                    ErrorKind::Format(format!("invalid CDR: {m}")),
+                    ErrorKind::Format(format!("invalid CDR: {e}")),
                 )
             })?,
             _ => serde_json::from_slice(data).map_err(|e| {
