@@ -8,6 +8,10 @@
 //! Memory is bounded: a topic's queue holds the messages read ahead of the base time,
 //! and a base message waits only until every topic has a message at or after it, or
 //! messages more than `gap` later have been read, or the file ended.
+//!
+//! The mapping's side of topics is here too: a topic's own time field
+//! ([`topic_time`]) and the instance of a ULog topic or DataFlash message key `name[k]`
+//! ([`split_instance`]).
 
 use std::collections::VecDeque;
 
@@ -129,6 +133,37 @@ pub fn topic_time<T>(
         None => 1.0,
     };
     Ok(Some((path, factor)))
+}
+
+/// A mapped topic key `name[k]` whose instance `k` is not a number 0..=255.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{what} {key:?}: instance {instance:?} is not a number 0..=255")]
+pub struct InstanceError {
+    /// What the key names: `topic` (ULog) or `message` (DataFlash).
+    pub what: &'static str,
+    /// The key as written in the mapping.
+    pub key: String,
+    /// The text between the brackets.
+    pub instance: String,
+}
+
+/// Splits a mapped key `name[k]` into the name and the instance `k` (0 when absent);
+/// `what` is what the key names, for the error.
+pub fn split_instance<'k>(
+    key: &'k str,
+    what: &'static str,
+) -> Result<(&'k str, u8), InstanceError> {
+    match key.strip_suffix(']').and_then(|t| t.rsplit_once('[')) {
+        Some((name, k)) => k
+            .parse::<u8>()
+            .map(|k| (name, k))
+            .map_err(|_| InstanceError {
+                what,
+                key: key.to_string(),
+                instance: k.to_string(),
+            }),
+        None => Ok((key, 0)),
+    }
 }
 
 /// One decoded message of a mapped topic, waiting for alignment.
@@ -306,6 +341,20 @@ impl Aligner {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn instances_split_from_keys() {
+        assert_eq!(
+            split_instance("actuator_outputs[1]", "topic"),
+            Ok(("actuator_outputs", 1))
+        );
+        assert_eq!(split_instance("a", "topic"), Ok(("a", 0)));
+        let e = split_instance("ESC[x]", "message").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "message \"ESC[x]\": instance \"x\" is not a number 0..=255"
+        );
+    }
 
     fn message(t: f64, value: f64, epoch: u32) -> Message {
         Message {

@@ -3,7 +3,7 @@
 //! message's format is known, where those fields sit in its body, their value factors
 //! and the log's unit conversions.
 
-use super::super::align::topic_time;
+use super::super::align::{split_instance, topic_time};
 use super::super::error::{ErrorKind, IoError, Location, field, key};
 use super::super::mapping::{Mapping, Signal};
 use super::super::scalar::Scalar;
@@ -38,17 +38,6 @@ pub(super) struct Topic {
     /// Messages of the name seen (any instance), and of this instance.
     pub seen: u64,
     pub messages: u64,
-}
-
-/// `NAME` or `NAME[k]`: the name and instance (0 when absent).
-pub(super) fn split_key(k: &str) -> Result<(&str, u8), String> {
-    match k.strip_suffix(']').and_then(|t| t.rsplit_once('[')) {
-        Some((name, i)) => i
-            .parse::<u8>()
-            .map(|i| (name, i))
-            .map_err(|_| format!("message {k:?}: instance {i:?} is not a number 0..=255")),
-        None => Ok((k, 0)),
-    }
 }
 
 /// The messages `mapping` maps onto the slots of `layout`. A field is a label of the
@@ -87,12 +76,12 @@ pub(super) fn mapped_topics(
         let idx = match topics.iter().position(|t| t.key == topic_key) {
             Some(i) => i,
             None => {
-                let (msg, instance) = split_key(&topic_key).map_err(|m| {
+                let (msg, instance) = split_instance(&topic_key, "message").map_err(|e| {
                     IoError::new(
                         file,
                         Location::File,
                         key(&format!("signals.{}", signal.key())),
-                        ErrorKind::Mapping(m),
+                        ErrorKind::Mapping(e.to_string()),
                     )
                 })?;
                 let time = topic_time(mapping, &topic_key, file, |p| Ok(p.to_string()))?
