@@ -130,12 +130,18 @@ impl McapSource {
         for topic in &mut topics {
             topic.time = topic_time(mapping, &topic.name, file, parse_path)?.or(time_field.clone());
         }
-        let read_error = |m: String| IoError::new(file, Location::File, None, ErrorKind::Read(m));
-        let summary = indexed_summary(&mut handle, &topics).map_err(read_error)?;
+        let summary = indexed_summary(&mut handle, &topics).map_err(|e| {
+            IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
+        })?;
         let order = match &summary {
             Some(summary) => {
-                check_start(&mut handle).map_err(|m| {
-                    IoError::new(file, Location::Record(0), None, ErrorKind::Format(m))
+                check_start(&mut handle).map_err(|e| {
+                    IoError::new(
+                        file,
+                        Location::Record(0),
+                        None,
+                        ErrorKind::Format(e.to_string()),
+                    )
                 })?;
                 let options = IndexedReaderOptions::new()
                     .include_topics(topics.iter().map(|t| t.name.clone()))
