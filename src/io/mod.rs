@@ -49,7 +49,10 @@ mod ulog;
 mod units;
 mod validate;
 
-pub use ardupilot::{MISSING_ROTOR_SPEEDS, actuator_lines, ardupilot_rotors, ardupilot_skeleton};
+pub use ardupilot::{
+    ArduPilotParameterError, MISSING_ROTOR_SPEEDS, actuator_lines, ardupilot_rotors,
+    ardupilot_skeleton,
+};
 pub use contract_csv::DEFAULT_RANGE_BYTES;
 pub use dataflash::{LogParameters, read_parameters};
 pub use derive::DeriveOptions;
@@ -61,7 +64,9 @@ pub use mapping::{
 };
 pub use open::{LogFormat, log_format, open_log};
 pub use options::{InvalidSamples, ReadOptions};
-pub use px4::{Px4Rotor, layout_check, rotors_from_parameters, vehicle_skeleton};
+pub use px4::{
+    Px4ParameterError, Px4Rotor, layout_check, rotors_from_parameters, vehicle_skeleton,
+};
 pub use reader::LogReader;
 pub use summary::AirborneSpan;
 pub use summary::{Dropout, Gap, Summary};
