@@ -213,7 +213,7 @@ impl IdentifiedModel {
             .covariance
             .map(|rows| covariance_matrix(rows, names.len()))
             .transpose()
-            .map_err(err)?;
+            .map_err(|e| err(e.to_string()))?;
         Ok(Self {
             vehicle,
             structure,
@@ -352,15 +352,48 @@ fn without(structure: &ModelStructure, left_out: &[LeftOutTerm]) -> ModelStructu
     structure.select_columns(&keep)
 }
 
+/// Why a model file's covariance rows are not the parameters' covariance matrix.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum CovarianceError {
+    /// Not n rows of n values for n parameters.
+    #[error("covariance: expected {0} rows of {0} values (one per parameter)")]
+    Shape(usize),
+    /// A value that is NaN or infinite.
+    #[error("covariance: a value is not a finite number")]
+    NotFinite,
+}
+
 /// The stored covariance rows as an n × n matrix, or why they are not one.
-fn covariance_matrix(rows: Vec<Vec<f64>>, n: usize) -> Result<DMatrix<f64>, String> {
+fn covariance_matrix(rows: Vec<Vec<f64>>, n: usize) -> Result<DMatrix<f64>, CovarianceError> {
     if rows.len() != n || rows.iter().any(|r| r.len() != n) {
-        return Err(format!(
-            "covariance: expected {n} rows of {n} values (one per parameter)"
-        ));
+        return Err(CovarianceError::Shape(n));
     }
     if rows.iter().flatten().any(|v| !v.is_finite()) {
-        return Err("covariance: a value is not a finite number".into());
+        return Err(CovarianceError::NotFinite);
     }
     Ok(DMatrix::from_fn(n, n, |i, j| rows[i][j]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Stored rows of the wrong shape or with a non-finite value are refused, in the
+    /// words the model file's error carries.
+    #[test]
+    fn covariance_rows_are_checked() {
+        let words = |rows: Vec<Vec<f64>>| covariance_matrix(rows, 2).map_err(|e| e.to_string());
+        assert_eq!(
+            words(vec![vec![1.0, 0.0], vec![0.0, 2.0]]),
+            Ok(DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 2.0]))
+        );
+        assert_eq!(
+            words(vec![vec![1.0, 0.0]]),
+            Err("covariance: expected 2 rows of 2 values (one per parameter)".into())
+        );
+        assert_eq!(
+            words(vec![vec![1.0, 0.0], vec![0.0, f64::NAN]]),
+            Err("covariance: a value is not a finite number".into())
+        );
+    }
 }

@@ -108,8 +108,9 @@ pub use vehicle::{Vehicle, VehicleSource};
 /// or a flight (controller, sensors, undeclared effects) written as a contract CSV.
 pub mod simulate {
     pub use crate::sim::Effect;
+    pub use crate::sim::effects::EffectError;
     pub use crate::sim::flight::FlightConfig;
-    pub use crate::sim::run::{Mode, SimulateOptions, VehicleChoice, simulate_to_file};
+    pub use crate::sim::run::{Mode, SimError, SimulateOptions, VehicleChoice, simulate_to_file};
     pub use crate::sim::test_matrix::Design;
 }
 

@@ -9,7 +9,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use mrsysid::simulate::{
-    Design, Effect, FlightConfig, Mode, SimulateOptions, VehicleChoice, simulate_to_file,
+    Design, Effect, EffectError, FlightConfig, Mode, SimulateOptions, VehicleChoice,
+    simulate_to_file,
 };
 use mrsysid::{
     Holdout, Identification, InflowCorrection, InvalidSamples, Mapping, ModelOptions, ReadOptions,
@@ -267,7 +268,7 @@ struct SimulateArgs {
     near_ground: f64,
 }
 
-fn parse_effect(s: &str) -> Result<Effect, String> {
+fn parse_effect(s: &str) -> Result<Effect, EffectError> {
     s.parse()
 }
 

@@ -153,7 +153,7 @@ impl MemoryLog {
             )
         })?;
         if let Some(prev) = self.chunks.last() {
-            check_same_signals(prev, &c).map_err(|m| err(0, "chunk", ErrorKind::Format(m)))?;
+            check_same_signals(prev, &c).map_err(|kind| err(0, "chunk", kind))?;
         }
         check_values(&c, self.last_time()).map_err(|(k, field, kind)| err(k, &field, kind))?;
         self.samples += c.len() as u64;
@@ -228,14 +228,14 @@ impl Expected for Signals {
 }
 
 /// `c` carries the same rotor count and optional signals as `prev`.
-fn check_same_signals(prev: &SampleChunk, c: &SampleChunk) -> Result<(), String> {
+fn check_same_signals(prev: &SampleChunk, c: &SampleChunk) -> Result<(), ErrorKind> {
     let (was, is) = (prev.signals(), c.signals());
     if was == is {
         Ok(())
     } else {
-        Err(format!(
+        Err(ErrorKind::Format(format!(
             "this chunk carries {is:?}, the previous chunk {was:?}"
-        ))
+        )))
     }
 }
 

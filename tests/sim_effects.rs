@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use mrsysid::internals::sim::blade_element::{HubLoads, RotorKinematics};
-use mrsysid::internals::sim::effects::{ground_effect_ratio, vortex_ring_factor};
+use mrsysid::internals::sim::effects::{EffectError, ground_effect_ratio, vortex_ring_factor};
 use mrsysid::internals::sim::flight::{FlightConfig, fly};
 use mrsysid::internals::sim::inflow::InflowState;
 use mrsysid::internals::sim::{Effect, Effects, RotorFile, TruthInput, TruthModel};
@@ -277,18 +277,23 @@ fn bad_effect_strings_are_refused_with_the_reason() {
         ("rotor_speed_lag", "takes"),
         ("inflow_lag=2", "(0, 1] s"),
     ] {
-        let e = s.parse::<Effect>().unwrap_err();
+        let e = s.parse::<Effect>().unwrap_err().to_string();
         assert!(e.contains(needle), "{s}: {e}");
     }
     let v = vehicle();
     let e = Effects::new(vec!["weak_rotor=5,0.5".parse().unwrap()], &v).unwrap_err();
-    assert!(e.contains("rotor 5 does not exist"), "{e}");
-    let twice = vec!["delay=0.1".parse().unwrap(), "delay=0.2".parse().unwrap()];
-    assert!(
-        Effects::new(twice, &v)
-            .unwrap_err()
-            .contains("more than once")
+    assert_eq!(
+        e,
+        EffectError::NoSuchRotor {
+            rotor: 5,
+            rotors: 4
+        }
     );
+    assert!(e.to_string().contains("rotor 5 does not exist"), "{e}");
+    let twice = vec!["delay=0.1".parse().unwrap(), "delay=0.2".parse().unwrap()];
+    let e = Effects::new(twice, &v).unwrap_err();
+    assert_eq!(e, EffectError::Repeated { effect: "delay" });
+    assert!(e.to_string().contains("more than once"), "{e}");
 }
 
 /// Every effect prints in canonical form (all parameters, defaults filled in) and parses

@@ -414,7 +414,7 @@ fn time_effects_are_refused_in_sweeps() {
             effects: vec![e.parse().unwrap()],
             seed: 1,
         };
-        let err = simulate(&opts).unwrap_err();
+        let err = simulate(&opts).unwrap_err().to_string();
         assert!(err.contains("needs `--mode flight`"), "{e}: {err}");
     }
     // A smoothing cut-off at or above half the log rate, and an inflow lag shorter than
@@ -423,11 +423,15 @@ fn time_effects_are_refused_in_sweeps() {
         duration: 1.0,
         ..Default::default()
     };
-    let e = fly(&model(&["smoothed_loads=60"]), &cfg, 1).unwrap_err();
+    let e = fly(&model(&["smoothed_loads=60"]), &cfg, 1)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("smoothed_loads") && e.contains("half the sample rate"),
         "{e}"
     );
-    let e = fly(&model(&["inflow_lag=0.001"]), &cfg, 1).unwrap_err();
+    let e = fly(&model(&["inflow_lag=0.001"]), &cfg, 1)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("inflow_lag") && e.contains("step"), "{e}");
 }

@@ -8,10 +8,15 @@
 //! Memory is bounded: a topic's queue holds the messages read ahead of the base time,
 //! and a base message waits only until every topic has a message at or after it, or
 //! messages more than `gap` later have been read, or the file ended.
+//!
+//! The mapping's side of topics is here too: a topic's own time field
+//! ([`topic_time`]) and the instance of a ULog topic or DataFlash message key `name[k]`
+//! ([`split_instance`]).
 
 use std::collections::VecDeque;
 
 use super::error::{ErrorKind, IoError, Location, field, key};
+use super::field_path::FieldPathError;
 use super::mapping::Mapping;
 use super::row_source::RowSource;
 use super::summary::Dropout;
@@ -111,7 +116,7 @@ pub fn topic_time<T>(
     mapping: &Mapping,
     topic: &str,
     file: &str,
-    parse_path: impl Fn(&str) -> Result<T, String>,
+    parse_path: impl Fn(&str) -> Result<T, FieldPathError>,
 ) -> Result<Option<(T, f64)>, IoError> {
     let Some(tt) = mapping.mcap.topic_time.get(topic) else {
         return Ok(None);
@@ -124,16 +129,47 @@ pub fn topic_time<T>(
             ErrorKind::Mapping(m),
         )
     };
-    let path = parse_path(&tt.field).map_err(bad)?;
+    let path = parse_path(&tt.field).map_err(|e| bad(e.to_string()))?;
     let factor = match &tt.unit {
         Some(u) => {
             unit_for(u, None, Dimension::Time, "time")
-                .map_err(bad)?
+                .map_err(|e| bad(e.to_string()))?
                 .to_si
         }
         None => 1.0,
     };
     Ok(Some((path, factor)))
+}
+
+/// A mapped topic key `name[k]` whose instance `k` is not a number 0..=255.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{what} {key:?}: instance {instance:?} is not a number 0..=255")]
+pub struct InstanceError {
+    /// What the key names: `topic` (ULog) or `message` (DataFlash).
+    pub what: &'static str,
+    /// The key as written in the mapping.
+    pub key: String,
+    /// The text between the brackets.
+    pub instance: String,
+}
+
+/// Splits a mapped key `name[k]` into the name and the instance `k` (0 when absent);
+/// `what` is what the key names, for the error.
+pub fn split_instance<'k>(
+    key: &'k str,
+    what: &'static str,
+) -> Result<(&'k str, u8), InstanceError> {
+    match key.strip_suffix(']').and_then(|t| t.rsplit_once('[')) {
+        Some((name, k)) => k
+            .parse::<u8>()
+            .map(|k| (name, k))
+            .map_err(|_| InstanceError {
+                what,
+                key: key.to_string(),
+                instance: k.to_string(),
+            }),
+        None => Ok((key, 0)),
+    }
 }
 
 /// One decoded message of a mapped topic, waiting for alignment.
@@ -311,6 +347,20 @@ impl Aligner {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn instances_split_from_keys() {
+        assert_eq!(
+            split_instance("actuator_outputs[1]", "topic"),
+            Ok(("actuator_outputs", 1))
+        );
+        assert_eq!(split_instance("a", "topic"), Ok(("a", 0)));
+        let e = split_instance("ESC[x]", "message").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "message \"ESC[x]\": instance \"x\" is not a number 0..=255"
+        );
+    }
 
     fn message(t: f64, value: f64, epoch: u32) -> Message {
         Message {

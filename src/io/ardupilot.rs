@@ -95,29 +95,74 @@ fn frame(class: u32, frame_type: u32) -> Option<(&'static str, Vec<(f64, f64)>)>
     })
 }
 
+/// Why ArduPilot's parameters (and the arm length given with them) give no rotor table
+/// or actuator map; names the parameter.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ArduPilotParameterError {
+    /// `FRAME_CLASS` or `FRAME_TYPE` absent or not a whole number ≥ 0.
+    #[error("parameter {name} is not in the log or not a whole number")]
+    NotWholeNumber {
+        /// The parameter.
+        name: &'static str,
+    },
+    /// A frame whose motor order the reader does not know.
+    #[error(
+        "FRAME_CLASS = {class}, FRAME_TYPE = {frame_type}: not a frame this reader knows \
+         (quad 1 with type 0 +, 1 X, 3 H; hexa 2 and octa 3 with type 0 + or 1 X); write \
+         the vehicle file's rotor table by hand in ArduPilot's motor order"
+    )]
+    UnknownFrame {
+        /// `FRAME_CLASS`.
+        class: f64,
+        /// `FRAME_TYPE`.
+        frame_type: f64,
+    },
+    /// An arm length that is not a positive number of metres.
+    #[error("arm length {arm} m must be positive")]
+    ArmLength {
+        /// The arm length given, m.
+        arm: f64,
+    },
+    /// A thrust curve exponent outside the actuator map's 0..1.
+    #[error("MOT_THST_EXPO = {expo}: only 0..1 maps onto the actuator map's thr_mdl_fac")]
+    ThrustExpo {
+        /// `MOT_THST_EXPO`.
+        expo: f64,
+    },
+    /// PWM or spin bounds that do not increase.
+    #[error(
+        "MOT_PWM_MIN/MAX = {pwm_min}/{pwm_max}, MOT_SPIN_MIN/MAX = {spin_min}/{spin_max}: not an increasing range"
+    )]
+    MotorRange {
+        /// PWM at zero output (1000 when not logged positive).
+        pwm_min: f64,
+        /// PWM at full output (2000 when not logged positive).
+        pwm_max: f64,
+        /// `MOT_SPIN_MIN`.
+        spin_min: f64,
+        /// `MOT_SPIN_MAX`.
+        spin_max: f64,
+    },
+}
+
 /// The rotor table of the log's `FRAME_CLASS`/`FRAME_TYPE` with arm length `arm` (m),
 /// rotor k being ArduPilot's motor k, and the frame's name; errors name the parameter.
 pub fn ardupilot_rotors(
     params: &BTreeMap<String, f64>,
     arm: f64,
-) -> Result<(Vec<Rotor>, &'static str), String> {
-    let get = |name: &str| {
+) -> Result<(Vec<Rotor>, &'static str), ArduPilotParameterError> {
+    let get = |name: &'static str| {
         params
             .get(name)
             .copied()
             .filter(|v| v.is_finite() && *v >= 0.0 && v.fract() == 0.0)
-            .ok_or_else(|| format!("parameter {name} is not in the log or not a whole number"))
+            .ok_or(ArduPilotParameterError::NotWholeNumber { name })
     };
     let (class, frame_type) = (get("FRAME_CLASS")?, get("FRAME_TYPE")?);
-    let (name, motors) = frame(class as u32, frame_type as u32).ok_or_else(|| {
-        format!(
-            "FRAME_CLASS = {class}, FRAME_TYPE = {frame_type}: not a frame this reader knows \
-             (quad 1 with type 0 +, 1 X, 3 H; hexa 2 and octa 3 with type 0 + or 1 X); write \
-             the vehicle file's rotor table by hand in ArduPilot's motor order"
-        )
-    })?;
+    let (name, motors) = frame(class as u32, frame_type as u32)
+        .ok_or(ArduPilotParameterError::UnknownFrame { class, frame_type })?;
     if !(arm.is_finite() && arm > 0.0) {
-        return Err(format!("arm length {arm} m must be positive"));
+        return Err(ArduPilotParameterError::ArmLength { arm });
     }
     let snap = |v: f64| if v.abs() < 1e-12 { 0.0 } else { v };
     let rotors = motors
@@ -142,7 +187,7 @@ pub fn ardupilot_rotors(
 /// s₀, s₁ = `MOT_SPIN_MIN`/`MAX`; e = `MOT_THST_EXPO`). That is the crate's actuator map
 /// with `pwm_min` = p₀ + s₀(p₁ − p₀), `pwm_max` = p₀ + s₁(p₁ − p₀) and `thr_mdl_fac`
 /// = e; the rotor speed is then `max_speed` · √(thrust fraction) (thrust ∝ Ω²).
-pub fn actuator_lines(params: &BTreeMap<String, f64>) -> Result<String, String> {
+pub fn actuator_lines(params: &BTreeMap<String, f64>) -> Result<String, ArduPilotParameterError> {
     let get = |name: &str, default: f64| params.get(name).copied().unwrap_or(default);
     let (mut p0, mut p1) = (get("MOT_PWM_MIN", 0.0), get("MOT_PWM_MAX", 0.0));
     if p0 <= 0.0 || p1 <= 0.0 {
@@ -151,14 +196,15 @@ pub fn actuator_lines(params: &BTreeMap<String, f64>) -> Result<String, String> 
     let (s0, s1) = (get("MOT_SPIN_MIN", 0.15), get("MOT_SPIN_MAX", 0.95));
     let e = get("MOT_THST_EXPO", 0.65);
     if !(0.0..=1.0).contains(&e) {
-        return Err(format!(
-            "MOT_THST_EXPO = {e}: only 0..1 maps onto the actuator map's thr_mdl_fac"
-        ));
+        return Err(ArduPilotParameterError::ThrustExpo { expo: e });
     }
     if !(p0 < p1 && 0.0 <= s0 && s0 < s1 && s1 <= 1.0) {
-        return Err(format!(
-            "MOT_PWM_MIN/MAX = {p0}/{p1}, MOT_SPIN_MIN/MAX = {s0}/{s1}: not an increasing range"
-        ));
+        return Err(ArduPilotParameterError::MotorRange {
+            pwm_min: p0,
+            pwm_max: p1,
+            spin_min: s0,
+            spin_max: s1,
+        });
     }
     let lo = p0 + s0 * (p1 - p0);
     let hi = p0 + s1 * (p1 - p0);
@@ -264,9 +310,13 @@ mod tests {
             assert!((v.arm_length() - a).abs() < 1e-6, "{name}");
         }
         let e = ardupilot_rotors(&params(1.0, 2.0), a).unwrap_err();
-        assert!(e.contains("FRAME_TYPE = 2"), "{e}");
-        let e = ardupilot_rotors(&BTreeMap::new(), a).unwrap_err();
-        assert!(e.contains("FRAME_CLASS"), "{e}");
+        assert!(e.to_string().contains("FRAME_TYPE = 2"), "{e}");
+        assert_eq!(
+            ardupilot_rotors(&BTreeMap::new(), a),
+            Err(ArduPilotParameterError::NotWholeNumber {
+                name: "FRAME_CLASS"
+            })
+        );
     }
 
     /// Defaults (PWM 1000..2000, spin 0.15..0.95, expo 0.65) give PWM 1150..1950.
@@ -290,6 +340,9 @@ mod tests {
             "{text}"
         );
         let p = BTreeMap::from([("MOT_THST_EXPO".to_string(), -0.2)]);
-        assert!(actuator_lines(&p).unwrap_err().contains("MOT_THST_EXPO"));
+        assert_eq!(
+            actuator_lines(&p),
+            Err(ArduPilotParameterError::ThrustExpo { expo: -0.2 })
+        );
     }
 }

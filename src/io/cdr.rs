@@ -11,6 +11,41 @@ const MAX_SEQUENCE: usize = 1 << 24;
 /// Deepest nesting accepted.
 const MAX_DEPTH: usize = 32;
 
+/// Why a CDR message does not decode.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CdrError {
+    /// Fewer than the 4 bytes of the encapsulation header.
+    #[error("CDR message shorter than its 4-byte header")]
+    NoHeader,
+    /// An encapsulation that is not plain CDR (big or little endian).
+    #[error("unknown CDR representation identifier {0}")]
+    Representation(u8),
+    /// The message ends before a value it must hold.
+    #[error("CDR message ends at byte {len} but {need} more bytes are needed at byte {at}")]
+    Truncated {
+        /// Bytes in the message.
+        len: usize,
+        /// Bytes the value needs.
+        need: usize,
+        /// Where the value starts.
+        at: usize,
+    },
+    /// Nesting deeper than the decoder follows.
+    #[error("message nesting too deep")]
+    TooDeep,
+    /// A nested type the schema does not define.
+    #[error("type {0:?} not in schema")]
+    UnknownType(String),
+    /// A sequence length prefix longer than the message could hold.
+    #[error("field {field:?}: sequence length {length} exceeds the message")]
+    SequenceTooLong {
+        /// The field.
+        field: String,
+        /// The length prefix read.
+        length: usize,
+    },
+}
+
 struct Cursor<'a> {
     data: &'a [u8],
     pos: usize,
@@ -24,26 +59,25 @@ impl Cursor<'_> {
         self.pos += (n - rel % n) % n;
     }
 
-    fn take(&mut self, n: usize) -> Result<&[u8], String> {
+    fn take(&mut self, n: usize) -> Result<&[u8], CdrError> {
         let end = self
             .pos
             .checked_add(n)
             .filter(|&e| e <= self.data.len())
-            .ok_or_else(|| {
-                format!(
-                    "CDR message ends at byte {} but {n} more bytes are needed at byte {}",
-                    self.data.len(),
-                    self.pos
-                )
+            .ok_or(CdrError::Truncated {
+                len: self.data.len(),
+                need: n,
+                at: self.pos,
             })?;
         let s = &self.data[self.pos..end];
         self.pos = end;
         Ok(s)
     }
 
-    fn u32(&mut self) -> Result<u32, String> {
+    fn u32(&mut self) -> Result<u32, CdrError> {
         self.align(4);
-        let b: [u8; 4] = self.take(4)?.try_into().map_err(|_| "short read")?;
+        // `take` returns the 4 bytes asked for: the conversion cannot fail.
+        let b: [u8; 4] = self.take(4)?.try_into().unwrap_or_default();
         Ok(if self.little {
             u32::from_le_bytes(b)
         } else {
@@ -51,15 +85,15 @@ impl Cursor<'_> {
         })
     }
 
-    fn primitive(&mut self, p: Scalar) -> Result<Value, String> {
+    fn primitive(&mut self, p: Scalar) -> Result<Value, CdrError> {
         let n = p.size();
         self.align(n);
         let little = self.little;
         let b = self.take(n)?;
+        // `take` returns the `p.size()` bytes of the scalar: the conversions cannot fail.
         macro_rules! num {
             ($t:ty) => {{
-                let arr: [u8; std::mem::size_of::<$t>()] =
-                    b.try_into().map_err(|_| "short read")?;
+                let arr: [u8; std::mem::size_of::<$t>()] = b.try_into().unwrap_or_default();
                 if little {
                     <$t>::from_le_bytes(arr)
                 } else {
@@ -89,14 +123,14 @@ fn number(x: f64) -> Value {
 }
 
 /// Decodes one CDR message of the schema's main type.
-pub fn decode(schema: &Schema, data: &[u8]) -> Result<Value, String> {
+pub fn decode(schema: &Schema, data: &[u8]) -> Result<Value, CdrError> {
     if data.len() < 4 {
-        return Err("CDR message shorter than its 4-byte header".into());
+        return Err(CdrError::NoHeader);
     }
     let little = match data[1] {
         0 | 2 => false,
         1 | 3 => true,
-        k => return Err(format!("unknown CDR representation identifier {k}")),
+        k => return Err(CdrError::Representation(k)),
     };
     let mut c = Cursor {
         data,
@@ -111,14 +145,14 @@ fn decode_message(
     name: &str,
     c: &mut Cursor,
     depth: usize,
-) -> Result<Value, String> {
+) -> Result<Value, CdrError> {
     if depth > MAX_DEPTH {
-        return Err("message nesting too deep".into());
+        return Err(CdrError::TooDeep);
     }
     let fields = schema
         .types
         .get(name)
-        .ok_or_else(|| format!("type {name:?} not in schema"))?;
+        .ok_or_else(|| CdrError::UnknownType(name.to_string()))?;
     let mut map = Map::new();
     for f in fields {
         let v = decode_field(schema, f, c, depth)?;
@@ -127,17 +161,22 @@ fn decode_message(
     Ok(Value::Object(map))
 }
 
-fn decode_field(schema: &Schema, f: &Field, c: &mut Cursor, depth: usize) -> Result<Value, String> {
+fn decode_field(
+    schema: &Schema,
+    f: &Field,
+    c: &mut Cursor,
+    depth: usize,
+) -> Result<Value, CdrError> {
     let count = match f.shape {
         Shape::Scalar => return decode_one(schema, &f.ty, c, depth),
         Shape::Fixed(n) => n,
         Shape::Sequence => c.u32()? as usize,
     };
     if count > MAX_SEQUENCE || count > c.data.len() {
-        return Err(format!(
-            "field {:?}: sequence length {count} exceeds the message",
-            f.name
-        ));
+        return Err(CdrError::SequenceTooLong {
+            field: f.name.clone(),
+            length: count,
+        });
     }
     (0..count)
         .map(|_| decode_one(schema, &f.ty, c, depth))
@@ -150,7 +189,7 @@ fn decode_one(
     ty: &FieldType,
     c: &mut Cursor,
     depth: usize,
-) -> Result<Value, String> {
+) -> Result<Value, CdrError> {
     match ty {
         FieldType::Primitive(p) => c.primitive(*p),
         FieldType::String => {
@@ -197,10 +236,15 @@ mod tests {
         assert_eq!(v["label"], "a");
         assert_eq!(v["seq"][0], -3);
         // Truncation is an error, not a panic.
-        assert!(
-            decode(&schema, &b[..b.len() - 1])
-                .unwrap_err()
-                .contains("more bytes are needed")
+        let e = decode(&schema, &b[..b.len() - 1]).unwrap_err();
+        assert_eq!(
+            e,
+            CdrError::Truncated {
+                len: b.len() - 1,
+                need: 2,
+                at: b.len() - 2
+            }
         );
+        assert!(e.to_string().contains("more bytes are needed"), "{e}");
     }
 }

@@ -41,28 +41,55 @@ impl Default for DeriveOptions {
     }
 }
 
+/// Derivation options that cannot be used; the error names the option.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DeriveOptionsError {
+    /// A polynomial order outside 1..=5.
+    #[error("sg_order = {sg_order} must be in 1..=5")]
+    Order {
+        /// The order given.
+        sg_order: usize,
+    },
+    /// A window that is even, shorter than the order + 2, or longer than 201 samples.
+    #[error(
+        "sg_window = {sg_window} must be odd, at least sg_order + 2 = {} and at most 201",
+        sg_order + 2
+    )]
+    Window {
+        /// The window given, samples.
+        sg_window: usize,
+        /// The order it goes with.
+        sg_order: usize,
+    },
+    /// A lever arm with a component not finite or beyond 10 m.
+    #[error("imu_lever_arm = {imu_lever_arm:?} must be finite and within 10 m")]
+    LeverArm {
+        /// The lever arm given, m.
+        imu_lever_arm: [f64; 3],
+    },
+}
+
 impl DeriveOptions {
-    /// Checks window and order; the message names the offending option.
-    pub(crate) fn check(&self) -> Result<(), String> {
+    /// Checks window, order and lever arm.
+    pub(crate) fn check(&self) -> Result<(), DeriveOptionsError> {
         if !(1..=5).contains(&self.sg_order) {
-            return Err(format!("sg_order = {} must be in 1..=5", self.sg_order));
+            return Err(DeriveOptionsError::Order {
+                sg_order: self.sg_order,
+            });
         }
         if self.sg_window.is_multiple_of(2)
             || self.sg_window < self.sg_order + 2
             || self.sg_window > 201
         {
-            return Err(format!(
-                "sg_window = {} must be odd, at least sg_order + 2 = {} and at most 201",
-                self.sg_window,
-                self.sg_order + 2
-            ));
+            return Err(DeriveOptionsError::Window {
+                sg_window: self.sg_window,
+                sg_order: self.sg_order,
+            });
         }
         if let Some(r) = self.imu_lever_arm
             && r.iter().any(|c| !c.is_finite() || c.abs() > 10.0)
         {
-            return Err(format!(
-                "imu_lever_arm = {r:?} must be finite and within 10 m"
-            ));
+            return Err(DeriveOptionsError::LeverArm { imu_lever_arm: r });
         }
         Ok(())
     }
@@ -350,6 +377,33 @@ pub fn body_velocity(q: [f64; 4], v_world: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each refused option is named with its value, in the words the reader reports.
+    #[test]
+    fn bad_options_are_named() {
+        let check = |sg_window, sg_order, imu_lever_arm| {
+            DeriveOptions {
+                sg_window,
+                sg_order,
+                imu_lever_arm,
+            }
+            .check()
+            .map_err(|e| e.to_string())
+        };
+        assert_eq!(check(11, 2, Some([0.1, 0.0, -0.05])), Ok(()));
+        assert_eq!(
+            check(11, 6, None),
+            Err("sg_order = 6 must be in 1..=5".into())
+        );
+        assert_eq!(
+            check(4, 3, None),
+            Err("sg_window = 4 must be odd, at least sg_order + 2 = 5 and at most 201".into())
+        );
+        assert_eq!(
+            check(11, 2, Some([0.0, 11.0, 0.0])),
+            Err("imu_lever_arm = [0.0, 11.0, 0.0] must be finite and within 10 m".into())
+        );
+    }
 
     /// A chunk of `n` samples at 100 Hz with Ω̇_1 = f(t), Ω̇_2 = −f(t), a time gap of 1 s
     /// after sample `gap_after` (if any).

@@ -20,34 +20,96 @@ pub enum Style {
     Ulog,
 }
 
+impl Style {
+    /// What an error calls the path: nothing (JSON) or `field path ` (ULog).
+    fn label(self) -> &'static str {
+        match self {
+            Self::Json => "",
+            Self::Ulog => "field path ",
+        }
+    }
+}
+
+/// Why a field path does not parse; the path is quoted as written.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FieldPathError {
+    /// A ULog path with an empty step name (`a..b`, `[0].x`, ``).
+    #[error("empty name in field path {path:?}")]
+    EmptyName {
+        /// The path.
+        path: String,
+    },
+    /// A JSON path with no step at all.
+    #[error("empty field path {path:?}")]
+    Empty {
+        /// The path.
+        path: String,
+    },
+    /// A `[` without its `]`.
+    #[error("unclosed '[' in {}{path:?}", style.label())]
+    Unclosed {
+        /// The path.
+        path: String,
+        /// Whose path.
+        style: Style,
+    },
+    /// An index that is not a whole number ≥ 0.
+    #[error("bad index {index:?} in {}{path:?}", style.label())]
+    BadIndex {
+        /// The text between the brackets.
+        index: String,
+        /// The path.
+        path: String,
+        /// Whose path.
+        style: Style,
+    },
+    /// Text after an index that neither starts another index nor a field.
+    #[error("unexpected {text:?} in {}{path:?}", style.label())]
+    Unexpected {
+        /// The text after the `]`.
+        text: String,
+        /// The path.
+        path: String,
+        /// Whose path.
+        style: Style,
+    },
+}
+
 /// Parses `path` into steps.
-pub fn parse(path: &str, style: Style) -> Result<Vec<Step>, String> {
-    let at = match style {
-        Style::Json => "",
-        Style::Ulog => "field path ",
-    };
+pub fn parse(path: &str, style: Style) -> Result<Vec<Step>, FieldPathError> {
     let mut steps = Vec::new();
     for part in path.split('.') {
         let (name, mut rest) = part.split_once('[').unwrap_or((part, ""));
         if !name.is_empty() {
             steps.push(Step::Key(name.to_string()));
         } else if style == Style::Ulog {
-            return Err(format!("empty name in field path {path:?}"));
+            return Err(FieldPathError::EmptyName { path: path.into() });
         } else if steps.is_empty() && rest.is_empty() {
-            return Err(format!("empty field path {path:?}"));
+            return Err(FieldPathError::Empty { path: path.into() });
         }
         while !rest.is_empty() {
             let (idx, after) = rest
                 .split_once(']')
-                .ok_or_else(|| format!("unclosed '[' in {at}{path:?}"))?;
-            let i = idx
-                .parse()
-                .map_err(|_| format!("bad index {idx:?} in {at}{path:?}"))?;
+                .ok_or_else(|| FieldPathError::Unclosed {
+                    path: path.into(),
+                    style,
+                })?;
+            let i = idx.parse().map_err(|_| FieldPathError::BadIndex {
+                index: idx.to_string(),
+                path: path.into(),
+                style,
+            })?;
             steps.push(Step::Index(i));
             rest = match after.strip_prefix('[') {
                 Some(r) => r,
                 None if after.is_empty() => "",
-                None => return Err(format!("unexpected {after:?} in {at}{path:?}")),
+                None => {
+                    return Err(FieldPathError::Unexpected {
+                        text: after.to_string(),
+                        path: path.into(),
+                        style,
+                    });
+                }
             };
         }
     }
@@ -61,7 +123,8 @@ mod tests {
     #[test]
     fn json_and_ulog_paths() {
         use Step::{Index, Key};
-        let both = |p: &str| (parse(p, Style::Json), parse(p, Style::Ulog));
+        let words = |p: &str, style| parse(p, style).map_err(|e| e.to_string());
+        let both = |p: &str| (words(p, Style::Json), words(p, Style::Ulog));
         let esc = vec![Key("esc".into()), Index(2), Key("rpm".into())];
         assert_eq!(both("esc[2].rpm"), (Ok(esc.clone()), Ok(esc)));
         let grid = vec![Key("m".into()), Index(1), Index(0)];

@@ -25,7 +25,7 @@ use serde::Deserialize;
 
 use super::derive::DeriveOptions;
 use super::error::{ErrorKind, IoError, Location, display_name, key};
-use super::units::{Dimension, unit_for};
+use super::units::{Dimension, UnitError, unit_for};
 
 /// Body axis convention of a log.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
@@ -173,35 +173,27 @@ pub struct ActuatorMap {
 }
 
 impl ActuatorMap {
-    /// Checks the ranges; the message names the offending key.
-    pub(crate) fn check(&self) -> Result<(), String> {
+    /// Checks the ranges; the error names the offending key.
+    pub(crate) fn check(&self) -> Result<(), SignalMapError> {
         match (self.pwm_min, self.pwm_max) {
             (Some(lo), Some(hi)) if lo.is_finite() && hi.is_finite() && lo < hi => {}
             (None, None) => {}
-            (lo, hi) => {
-                return Err(format!(
-                    "actuator: give both `pwm_min` < `pwm_max` (finite), or neither (got {lo:?}, {hi:?})"
-                ));
-            }
+            (pwm_min, pwm_max) => return Err(SignalMapError::PwmRange { pwm_min, pwm_max }),
         }
         if !(self.max_speed.is_finite() && self.max_speed > 0.0) {
-            return Err(format!(
-                "actuator: `max_speed` = {} must be positive",
-                self.max_speed
-            ));
+            return Err(SignalMapError::MaxSpeed {
+                max_speed: self.max_speed,
+            });
         }
         if !(0.0..=1.0).contains(&self.thr_mdl_fac) {
-            return Err(format!(
-                "actuator: `thr_mdl_fac` = {} must be in [0, 1]",
-                self.thr_mdl_fac
-            ));
+            return Err(SignalMapError::ThrMdlFac {
+                thr_mdl_fac: self.thr_mdl_fac,
+            });
         }
         if let Some(tau) = self.time_constant
             && !(tau.is_finite() && tau > 0.0)
         {
-            return Err(format!(
-                "actuator: `time_constant` = {tau} s must be positive"
-            ));
+            return Err(SignalMapError::TimeConstant { time_constant: tau });
         }
         Ok(())
     }
@@ -453,12 +445,12 @@ impl Mapping {
         }
         for signal in Signal::ALL {
             if let Some(map) = mapping.get(signal) {
-                check_signal_map(signal, map).map_err(|m| {
+                check_signal_map(signal, map).map_err(|e| {
                     IoError::new(
                         name,
                         Location::File,
                         key(&key_path(signal)),
-                        ErrorKind::Mapping(m),
+                        ErrorKind::Mapping(e.to_string()),
                     )
                 })?;
             }
@@ -532,10 +524,67 @@ fn key_path(signal: Signal) -> String {
     }
 }
 
-fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), String> {
+/// Why a signal's table in a mapping file was refused (the error names its key).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SignalMapError {
+    /// An `actuator` table on another signal than `rotor_speeds`.
+    #[error("`actuator` is only for rotor_speeds")]
+    ActuatorNotRotorSpeeds,
+    /// One PWM bound without the other, or bounds not finite and increasing.
+    #[error(
+        "actuator: give both `pwm_min` < `pwm_max` (finite), or neither (got {pwm_min:?}, {pwm_max:?})"
+    )]
+    PwmRange {
+        /// `pwm_min` given.
+        pwm_min: Option<f64>,
+        /// `pwm_max` given.
+        pwm_max: Option<f64>,
+    },
+    /// A `max_speed` that is not a positive number.
+    #[error("actuator: `max_speed` = {max_speed} must be positive")]
+    MaxSpeed {
+        /// The value given.
+        max_speed: f64,
+    },
+    /// A `thr_mdl_fac` outside [0, 1].
+    #[error("actuator: `thr_mdl_fac` = {thr_mdl_fac} must be in [0, 1]")]
+    ThrMdlFac {
+        /// The value given.
+        thr_mdl_fac: f64,
+    },
+    /// A `time_constant` that is not a positive number of seconds.
+    #[error("actuator: `time_constant` = {time_constant} s must be positive")]
+    TimeConstant {
+        /// The value given, s.
+        time_constant: f64,
+    },
+    /// A unit that is unknown or of another dimension.
+    #[error(transparent)]
+    Unit(#[from] UnitError),
+    /// Neither `columns` nor `fields`.
+    #[error("give `columns` (CSV) or `topic` and `fields` (MCAP)")]
+    NoColumnsOrFields,
+    /// `fields` without a `topic` (only `[time]` may omit it).
+    #[error("`fields` needs a `topic`")]
+    FieldsWithoutTopic,
+    /// A list of names whose length is not the signal's component count.
+    #[error("`{list}` lists {listed} names, {signal} needs {needs}")]
+    WrongCount {
+        /// `columns` or `fields`.
+        list: &'static str,
+        /// Names listed.
+        listed: usize,
+        /// The signal's mapping key.
+        signal: &'static str,
+        /// Components the signal has.
+        needs: usize,
+    },
+}
+
+fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), SignalMapError> {
     if let Some(a) = &map.actuator {
         if signal != Signal::RotorSpeeds {
-            return Err("`actuator` is only for rotor_speeds".into());
+            return Err(SignalMapError::ActuatorNotRotorSpeeds);
         }
         a.check()?;
     }
@@ -543,10 +592,10 @@ fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), String> {
         unit_for(unit, map.pole_pairs, signal.dimension(), signal.key())?;
     }
     if map.columns.is_empty() && map.fields.is_empty() {
-        return Err("give `columns` (CSV) or `topic` and `fields` (MCAP)".into());
+        return Err(SignalMapError::NoColumnsOrFields);
     }
     if !map.fields.is_empty() && map.topic.is_none() && signal != Signal::Time {
-        return Err("`fields` needs a `topic`".into());
+        return Err(SignalMapError::FieldsWithoutTopic);
     }
     let fixed = signal.components(0);
     for (what, list) in [("columns", &map.columns), ("fields", &map.fields)] {
@@ -554,11 +603,12 @@ fn check_signal_map(signal: Signal, map: &SignalMap) -> Result<(), String> {
             && !matches!(signal, Signal::RotorSpeeds | Signal::RotorAccelerations)
             && list.len() != fixed
         {
-            return Err(format!(
-                "`{what}` lists {} names, {} needs {fixed}",
-                list.len(),
-                signal.key()
-            ));
+            return Err(SignalMapError::WrongCount {
+                list: what,
+                listed: list.len(),
+                signal: signal.key(),
+                needs: fixed,
+            });
         }
     }
     Ok(())

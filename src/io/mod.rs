@@ -49,7 +49,10 @@ mod ulog;
 mod units;
 mod validate;
 
-pub use ardupilot::{MISSING_ROTOR_SPEEDS, actuator_lines, ardupilot_rotors, ardupilot_skeleton};
+pub use ardupilot::{
+    ArduPilotParameterError, MISSING_ROTOR_SPEEDS, actuator_lines, ardupilot_rotors,
+    ardupilot_skeleton,
+};
 pub use contract_csv::DEFAULT_RANGE_BYTES;
 pub use dataflash::{LogParameters, read_parameters};
 pub use derive::DeriveOptions;
@@ -61,7 +64,9 @@ pub use mapping::{
 };
 pub use open::{LogFormat, log_format, open_log};
 pub use options::{InvalidSamples, ReadOptions};
-pub use px4::{Px4Rotor, layout_check, rotors_from_parameters, vehicle_skeleton};
+pub use px4::{
+    Px4ParameterError, Px4Rotor, layout_check, rotors_from_parameters, vehicle_skeleton,
+};
 pub use reader::LogReader;
 pub use summary::AirborneSpan;
 pub use summary::{Dropout, Gap, Summary};
@@ -79,6 +84,8 @@ pub const MAX_ROTORS: usize = 16;
 /// message decoded by it into the JSON value the field paths address. Reading a log
 /// needs neither ([`open_log`] does it); they are here for those checks only.
 pub mod internals {
-    pub use super::cdr::decode as decode_cdr;
-    pub use super::ros2msg::{Schema as Ros2Schema, parse_schema as parse_ros2_schema};
+    pub use super::cdr::{CdrError, decode as decode_cdr};
+    pub use super::ros2msg::{
+        Schema as Ros2Schema, SchemaError as Ros2SchemaError, parse_schema as parse_ros2_schema,
+    };
 }

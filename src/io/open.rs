@@ -42,12 +42,12 @@ pub fn open_log(
     if let Some(d) = mapping.and_then(|m| m.derive) {
         opts.derive = d;
     }
-    opts.derive.check().map_err(|m| {
+    opts.derive.check().map_err(|e| {
         IoError::new(
             &file,
             Location::File,
             error::key("derive"),
-            ErrorKind::Mapping(m),
+            ErrorKind::Mapping(e.to_string()),
         )
     })?;
     if opts.max_gap.is_nan() || opts.max_gap <= 0.0 {

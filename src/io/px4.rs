@@ -40,17 +40,50 @@ pub struct Px4Rotor {
     pub km: f64,
 }
 
+/// Why PX4's control-allocation parameters give no rotor table; names the parameter.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Px4ParameterError {
+    /// No `CA_ROTOR_COUNT` (a log of PX4 before v1.13).
+    #[error(
+        "parameter CA_ROTOR_COUNT is not in the log (PX4 before v1.13 has no control-allocation parameters)"
+    )]
+    NoRotorCount,
+    /// A rotor count that is not a whole number 1..=[`MAX_ROTORS`](super::MAX_ROTORS).
+    #[error(
+        "CA_ROTOR_COUNT = {count}: expected a whole number 1..={}",
+        super::MAX_ROTORS
+    )]
+    RotorCount {
+        /// The value logged.
+        count: f64,
+    },
+    /// A rotor's parameter absent or not finite.
+    #[error("parameter {name} is not in the log or not finite")]
+    Missing {
+        /// The parameter, e.g. `CA_ROTOR2_KM`.
+        name: String,
+    },
+    /// A rotor whose moment coefficient is 0, so its spin is unknown.
+    #[error(
+        "CA_ROTOR{index}_KM = 0: the spin direction of rotor {} is unknown",
+        index + 1
+    )]
+    ZeroMomentCoefficient {
+        /// PX4's 0-based rotor index.
+        index: usize,
+    },
+}
+
 /// The rotors `CA_ROTOR0..CA_ROTOR{n−1}` of `CA_ROTOR_COUNT`; errors name the missing or
 /// invalid parameter.
-pub fn rotors_from_parameters(params: &BTreeMap<String, f64>) -> Result<Vec<Px4Rotor>, String> {
+pub fn rotors_from_parameters(
+    params: &BTreeMap<String, f64>,
+) -> Result<Vec<Px4Rotor>, Px4ParameterError> {
     let count = *params
         .get("CA_ROTOR_COUNT")
-        .ok_or("parameter CA_ROTOR_COUNT is not in the log (PX4 before v1.13 has no control-allocation parameters)")?;
+        .ok_or(Px4ParameterError::NoRotorCount)?;
     if !(1.0..=super::MAX_ROTORS as f64).contains(&count) || count.fract() != 0.0 {
-        return Err(format!(
-            "CA_ROTOR_COUNT = {count}: expected a whole number 1..={}",
-            super::MAX_ROTORS
-        ));
+        return Err(Px4ParameterError::RotorCount { count });
     }
     (0..count as usize)
         .map(|i| {
@@ -60,14 +93,11 @@ pub fn rotors_from_parameters(params: &BTreeMap<String, f64>) -> Result<Vec<Px4R
                     .get(&name)
                     .copied()
                     .filter(|v| v.is_finite())
-                    .ok_or_else(|| format!("parameter {name} is not in the log or not finite"))
+                    .ok_or(Px4ParameterError::Missing { name })
             };
             let km = get("KM")?;
             if km == 0.0 {
-                return Err(format!(
-                    "CA_ROTOR{i}_KM = 0: the spin direction of rotor {} is unknown",
-                    i + 1
-                ));
+                return Err(Px4ParameterError::ZeroMomentCoefficient { index: i });
             }
             Ok(Px4Rotor {
                 x: get("PX")?,
@@ -211,10 +241,11 @@ mod tests {
     fn missing_and_asymmetric() {
         let mut p = params([(0.1, 0.1, 0.05); 4]);
         p.remove("CA_ROTOR2_KM");
-        assert!(
-            rotors_from_parameters(&p)
-                .unwrap_err()
-                .contains("CA_ROTOR2_KM")
+        assert_eq!(
+            rotors_from_parameters(&p),
+            Err(Px4ParameterError::Missing {
+                name: "CA_ROTOR2_KM".into()
+            })
         );
         let balanced = [0.05, 0.05, -0.05, -0.05];
         // (layout, words the check must say): a rectangle (H-frame: equal arms, unequal

@@ -48,6 +48,51 @@ pub struct Schema {
     pub types: HashMap<String, Vec<Field>>,
 }
 
+/// Why schema text was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SchemaError {
+    /// A line that is not `type name` (nor a comment or constant).
+    #[error("schema line {line}: expected \"type name\", got {text:?}")]
+    NotTypeName {
+        /// 1-based line within its definition.
+        line: usize,
+        /// The line, comment and surrounding space removed.
+        text: String,
+    },
+    /// An array type without its closing `]`.
+    #[error("schema line {line}: bad array {ty:?}")]
+    BadArray {
+        /// 1-based line within its definition.
+        line: usize,
+        /// The type as written.
+        ty: String,
+    },
+    /// An array size that is not a whole number.
+    #[error("schema line {line}: bad array size {size:?}")]
+    BadArraySize {
+        /// 1-based line within its definition.
+        line: usize,
+        /// The text between the brackets.
+        size: String,
+    },
+    /// A field whose message type the schema does not define.
+    #[error("type {ty:?} of field {owner}.{field} is not defined in the schema")]
+    Undefined {
+        /// The missing type, fully qualified.
+        ty: String,
+        /// The type holding the field.
+        owner: String,
+        /// The field.
+        field: String,
+    },
+    /// The main type is not defined.
+    #[error("main type {root:?} is not defined")]
+    NoMainType {
+        /// The main type, fully qualified.
+        root: String,
+    },
+}
+
 /// `pkg/Type` → `pkg/msg/Type`; names without a package resolve in `pkg` of the
 /// enclosing definition; `Header` means `std_msgs/msg/Header`.
 fn qualify(name: &str, pkg: &str) -> String {
@@ -86,7 +131,7 @@ fn primitive(name: &str) -> Option<FieldType> {
     Some(FieldType::Primitive(p))
 }
 
-fn parse_fields(text: &str, pkg: &str) -> Result<Vec<Field>, String> {
+fn parse_fields(text: &str, pkg: &str) -> Result<Vec<Field>, SchemaError> {
     let mut fields = Vec::new();
     for (n, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
@@ -95,10 +140,10 @@ fn parse_fields(text: &str, pkg: &str) -> Result<Vec<Field>, String> {
         }
         let mut parts = line.split_whitespace();
         let (Some(ty), Some(name)) = (parts.next(), parts.next()) else {
-            return Err(format!(
-                "schema line {}: expected \"type name\", got {line:?}",
-                n + 1
-            ));
+            return Err(SchemaError::NotTypeName {
+                line: n + 1,
+                text: line.to_string(),
+            });
         };
         if name.contains('=') || parts.clone().next().is_some_and(|p| p.starts_with('=')) {
             continue; // constant
@@ -108,15 +153,18 @@ fn parse_fields(text: &str, pkg: &str) -> Result<Vec<Field>, String> {
             Some((b, rest)) => {
                 let inner = rest
                     .strip_suffix(']')
-                    .ok_or_else(|| format!("schema line {}: bad array {ty:?}", n + 1))?;
-                let shape =
-                    if inner.is_empty() || inner.starts_with("<=") {
-                        Shape::Sequence
-                    } else {
-                        Shape::Fixed(inner.parse().map_err(|_| {
-                            format!("schema line {}: bad array size {inner:?}", n + 1)
-                        })?)
-                    };
+                    .ok_or_else(|| SchemaError::BadArray {
+                        line: n + 1,
+                        ty: ty.to_string(),
+                    })?;
+                let shape = if inner.is_empty() || inner.starts_with("<=") {
+                    Shape::Sequence
+                } else {
+                    Shape::Fixed(inner.parse().map_err(|_| SchemaError::BadArraySize {
+                        line: n + 1,
+                        size: inner.to_string(),
+                    })?)
+                };
                 (b, shape)
             }
         };
@@ -131,7 +179,7 @@ fn parse_fields(text: &str, pkg: &str) -> Result<Vec<Field>, String> {
 }
 
 /// Parses schema text whose main type is `name` (`pkg/msg/Type` or `pkg/Type`).
-pub fn parse_schema(name: &str, text: &str) -> Result<Schema, String> {
+pub fn parse_schema(name: &str, text: &str) -> Result<Schema, SchemaError> {
     let root = qualify(name, "");
     let mut types = HashMap::new();
     let mut current = root.clone();
@@ -178,22 +226,54 @@ pub fn parse_schema(name: &str, text: &str) -> Result<Schema, String> {
 
 impl Schema {
     /// Every referenced type is defined and the nesting is finite.
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), SchemaError> {
         for (name, fields) in &self.types {
             for f in fields {
                 if let FieldType::Message(m) = &f.ty
                     && !self.types.contains_key(m)
                 {
-                    return Err(format!(
-                        "type {m:?} of field {name}.{} is not defined in the schema",
-                        f.name
-                    ));
+                    return Err(SchemaError::Undefined {
+                        ty: m.clone(),
+                        owner: name.clone(),
+                        field: f.name.clone(),
+                    });
                 }
             }
         }
         if !self.types.contains_key(&self.root) {
-            return Err(format!("main type {:?} is not defined", self.root));
+            return Err(SchemaError::NoMainType {
+                root: self.root.clone(),
+            });
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each refusal names the line or type, in the words the MCAP reader reports.
+    #[test]
+    fn bad_schemas_are_named() {
+        let words = |text: &str| parse_schema("p/msg/T", text).map_err(|e| e.to_string());
+        for (text, message) in [
+            (
+                "float64 x\nlonely\n",
+                "schema line 2: expected \"type name\", got \"lonely\"",
+            ),
+            ("float64[3 x\n", "schema line 1: bad array \"float64[3\""),
+            ("float64[n] x\n", "schema line 1: bad array size \"n\""),
+            (
+                "Inner i\n",
+                "type \"p/msg/Inner\" of field p/msg/T.i is not defined in the schema",
+            ),
+            (
+                "MSG: q/Other\nfloat64 y\n",
+                "main type \"p/msg/T\" is not defined",
+            ),
+        ] {
+            assert_eq!(words(text), Err(message.to_string()), "{text:?}");
+        }
     }
 }

@@ -73,7 +73,7 @@ impl SlotLayout {
             let factor = match &map.unit {
                 Some(u) => {
                     unit_for(u, map.pole_pairs, signal.dimension(), signal.key())
-                        .map_err(mapping_err)?
+                        .map_err(|e| mapping_err(e.to_string()))?
                         .to_si
                 }
                 None => 1.0,

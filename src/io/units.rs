@@ -62,10 +62,48 @@ pub struct Unit {
     pub to_si: f64,
 }
 
+/// Why a unit name was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum UnitError {
+    /// Not a unit the crate knows.
+    #[error(
+        "unknown unit {name:?} (known: s ms us ns, m/s ft/s km/h kn, rad/s deg/s rpm \
+         rev/s erpm, rad/s^2 deg/s^2 rpm/s, m/s^2 g ft/s^2, N lbf, N m, lbf ft, m ft, 1)"
+    )]
+    Unknown {
+        /// The name as given.
+        name: String,
+    },
+    /// `erpm` without the motor's pole pairs.
+    #[error("unit \"erpm\" needs `pole_pairs` (motor pole pairs)")]
+    PolePairsMissing,
+    /// Pole pairs that are not a whole number ≥ 1.
+    #[error("`pole_pairs` = {pole_pairs} must be a whole number >= 1")]
+    BadPolePairs {
+        /// The value given.
+        pole_pairs: f64,
+    },
+    /// A unit of another dimension than the signal's.
+    #[error(
+        "unit {name:?} is a {found:?} unit, but {what} needs a {want:?} unit such as {:?}",
+        want.si_unit()
+    )]
+    WrongDimension {
+        /// The name as given.
+        name: String,
+        /// Its dimension.
+        found: Dimension,
+        /// The signal's dimension.
+        want: Dimension,
+        /// The signal (its mapping key, e.g. `rates`).
+        what: &'static str,
+    },
+}
+
 /// Parses a unit name. `pole_pairs` is required for `erpm` (electrical RPM) and
 /// ignored otherwise. Names are case-insensitive; `^2` and `2` are accepted in
 /// accelerations (`rad/s^2`, `rad/s2`).
-pub fn parse_unit(name: &str, pole_pairs: Option<f64>) -> Result<Unit, String> {
+pub fn parse_unit(name: &str, pole_pairs: Option<f64>) -> Result<Unit, UnitError> {
     use Dimension::*;
     let n = name
         .trim()
@@ -87,9 +125,9 @@ pub fn parse_unit(name: &str, pole_pairs: Option<f64>) -> Result<Unit, String> {
         "rpm" => (AngularRate, rpm),
         "rev/s" | "hz" => (AngularRate, 2.0 * PI),
         "erpm" => {
-            let pp = pole_pairs.ok_or("unit \"erpm\" needs `pole_pairs` (motor pole pairs)")?;
+            let pp = pole_pairs.ok_or(UnitError::PolePairsMissing)?;
             if !(pp.is_finite() && pp >= 1.0 && pp.fract() == 0.0) {
-                return Err(format!("`pole_pairs` = {pp} must be a whole number >= 1"));
+                return Err(UnitError::BadPolePairs { pole_pairs: pp });
             }
             (AngularRate, rpm / pp)
         }
@@ -107,10 +145,9 @@ pub fn parse_unit(name: &str, pole_pairs: Option<f64>) -> Result<Unit, String> {
         "ft" => (Length, FOOT),
         "1" | "" => (Dimensionless, 1.0),
         _ => {
-            return Err(format!(
-                "unknown unit {name:?} (known: s ms us ns, m/s ft/s km/h kn, rad/s deg/s rpm \
-                 rev/s erpm, rad/s^2 deg/s^2 rpm/s, m/s^2 g ft/s^2, N lbf, N m, lbf ft, m ft, 1)"
-            ));
+            return Err(UnitError::Unknown {
+                name: name.to_string(),
+            });
         }
     };
     Ok(Unit { dimension, to_si })
@@ -121,18 +158,18 @@ pub fn unit_for(
     name: &str,
     pole_pairs: Option<f64>,
     want: Dimension,
-    what: &str,
-) -> Result<Unit, String> {
+    what: &'static str,
+) -> Result<Unit, UnitError> {
     let unit = parse_unit(name, pole_pairs)?;
     if unit.dimension == want {
         Ok(unit)
     } else {
-        Err(format!(
-            "unit {name:?} is a {:?} unit, but {what} needs a {:?} unit such as {:?}",
-            unit.dimension,
+        Err(UnitError::WrongDimension {
+            name: name.to_string(),
+            found: unit.dimension,
             want,
-            want.si_unit()
-        ))
+            what,
+        })
     }
 }
 
@@ -159,17 +196,25 @@ mod tests {
     #[test]
     fn wrong_dimension_and_unknown_units_are_refused() {
         let e = unit_for("m/s", None, Dimension::AngularRate, "rates").unwrap_err();
-        assert!(e.contains("rates needs a AngularRate unit"), "{e}");
-        assert!(
-            parse_unit("furlong/fortnight", None)
-                .unwrap_err()
-                .contains("unknown unit")
+        assert_eq!(
+            e,
+            UnitError::WrongDimension {
+                name: "m/s".into(),
+                found: Dimension::Speed,
+                want: Dimension::AngularRate,
+                what: "rates"
+            }
         );
-        assert!(parse_unit("erpm", None).unwrap_err().contains("pole_pairs"));
         assert!(
-            parse_unit("erpm", Some(6.5))
-                .unwrap_err()
-                .contains("whole number")
+            e.to_string().contains("rates needs a AngularRate unit"),
+            "{e}"
+        );
+        let e = parse_unit("furlong/fortnight", None).unwrap_err();
+        assert!(e.to_string().starts_with("unknown unit"), "{e}");
+        assert_eq!(parse_unit("erpm", None), Err(UnitError::PolePairsMissing));
+        assert_eq!(
+            parse_unit("erpm", Some(6.5)),
+            Err(UnitError::BadPolePairs { pole_pairs: 6.5 })
         );
     }
 }

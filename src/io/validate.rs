@@ -268,6 +268,58 @@ pub fn no_samples_error(
     )
 }
 
+/// Rotor speeds whose median puts the blade tips above [`MAX_TIP_MACH`] read as rad/s:
+/// logged in RPM, or in eRPM when even read as RPM they would be supersonic.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SupersonicTips {
+    /// The speeds look like eRPM (supersonic also as RPM), not RPM.
+    pub erpm: bool,
+    /// Median rotor speed read as rad/s.
+    pub speed: f64,
+    /// Rotor radius R, m.
+    pub radius: f64,
+    /// Tip Mach number at `speed`.
+    pub mach: f64,
+    /// Hover thrust coefficient C_T = m g/(n ρ π R⁴ Ω²) at `speed`.
+    pub thrust_coefficient: f64,
+    /// Tip Mach number with `speed` read as RPM.
+    pub rpm_mach: f64,
+    /// Hover thrust coefficient with `speed` read as RPM.
+    pub rpm_thrust_coefficient: f64,
+}
+
+impl std::fmt::Display for SupersonicTips {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (what, unit) = if self.erpm {
+            (
+                "electrical RPM (eRPM)",
+                "unit = \"erpm\" with pole_pairs = the motor's pole pairs",
+            )
+        } else {
+            ("RPM", "unit = \"rpm\"")
+        };
+        write!(
+            f,
+            "rotor speeds look like {what}, not rad/s: the median rotor speed {} rad/s \
+             puts the blade tips (R = {} m) at {} m/s, Mach {:.2}, and hovering at it \
+             would need a thrust coefficient C_T = m g/(n rho pi R^4 Omega^2) of {:.2e} \
+             (propellers have about 0.005 to 0.03); read as RPM it is {} rad/s, Mach \
+             {:.2}, C_T {:.2e}; declare the unit in a mapping file \
+             ([signals.rotor_speeds] {unit}, docs/mapping.md)",
+            about(self.speed),
+            self.radius,
+            about(self.speed * self.radius),
+            self.mach,
+            self.thrust_coefficient,
+            about(self.speed * RPM),
+            self.rpm_mach,
+            self.rpm_thrust_coefficient,
+        )
+    }
+}
+
+impl std::error::Error for SupersonicTips {}
+
 /// Statistics gathered while reading, to flag implausible units.
 #[derive(Debug, Clone, Default)]
 pub struct UnitStats {
@@ -327,9 +379,9 @@ impl UnitStats {
     }
 
     /// The blade-tip check of the rotor speeds, for `rotors` rotors of radius `radius`
-    /// (m) on a vehicle of `mass` (kg) in air of `density` (kg/m³): `Err(why)` when the
+    /// (m) on a vehicle of `mass` (kg) in air of `density` (kg/m³): an error when the
     /// median rotor speed puts the tips above [`MAX_TIP_MACH`] (rotor speeds in RPM or
-    /// eRPM read as rad/s), with the unit to declare; `Ok(Some(note))` when the tips are
+    /// eRPM read as rad/s), saying the unit to declare; `Ok(Some(note))` when the tips are
     /// subsonic but hovering at that speed would need a thrust coefficient below
     /// [`MIN_HOVER_THRUST_COEFFICIENT`]; else `Ok(None)`.
     pub fn rotor_speed_check(
@@ -338,7 +390,7 @@ impl UnitStats {
         radius: f64,
         mass: f64,
         density: f64,
-    ) -> Result<Option<String>, String> {
+    ) -> Result<Option<String>, SupersonicTips> {
         let Some(omega) = self.rotor_speed.median() else {
             return Ok(None);
         };
@@ -349,29 +401,15 @@ impl UnitStats {
                 / (rotors as f64 * density * std::f64::consts::PI * radius.powi(4) * w * w)
         };
         if mach(omega) > MAX_TIP_MACH {
-            let (what, unit) = if mach(omega * RPM) <= MAX_TIP_MACH {
-                ("RPM", "unit = \"rpm\"")
-            } else {
-                (
-                    "electrical RPM (eRPM)",
-                    "unit = \"erpm\" with pole_pairs = the motor's pole pairs",
-                )
-            };
-            return Err(format!(
-                "rotor speeds look like {what}, not rad/s: the median rotor speed {} rad/s \
-                 puts the blade tips (R = {radius} m) at {} m/s, Mach {:.2}, and hovering at it \
-                 would need a thrust coefficient C_T = m g/(n rho pi R^4 Omega^2) of {:.2e} \
-                 (propellers have about 0.005 to 0.03); read as RPM it is {} rad/s, Mach \
-                 {:.2}, C_T {:.2e}; declare the unit in a mapping file \
-                 ([signals.rotor_speeds] {unit}, docs/mapping.md)",
-                about(omega),
-                about(omega * radius),
-                mach(omega),
-                hover_ct(omega),
-                about(omega * RPM),
-                mach(omega * RPM),
-                hover_ct(omega * RPM),
-            ));
+            return Err(SupersonicTips {
+                erpm: mach(omega * RPM) > MAX_TIP_MACH,
+                speed: omega,
+                radius,
+                mach: mach(omega),
+                thrust_coefficient: hover_ct(omega),
+                rpm_mach: mach(omega * RPM),
+                rpm_thrust_coefficient: hover_ct(omega * RPM),
+            });
         }
         let ct = hover_ct(omega);
         Ok((ct < MIN_HOVER_THRUST_COEFFICIENT).then(|| {
@@ -500,6 +538,8 @@ mod tests {
         let e = stats(&[rpm; 10])
             .rotor_speed_check(4, 0.0565, 1.2, 1.225)
             .unwrap_err();
+        assert!(!e.erpm);
+        let e = e.to_string();
         assert!(
             e.starts_with("rotor speeds look like RPM, not rad/s: the median rotor speed 20700"),
             "{e}"
@@ -511,6 +551,8 @@ mod tests {
         let e = stats(&[7.0 * rpm; 10])
             .rotor_speed_check(4, 0.0635, 1.2, 1.225)
             .unwrap_err();
+        assert!(e.erpm);
+        let e = e.to_string();
         assert!(e.contains("eRPM") && e.contains("unit = \"erpm\""), "{e}");
         // 3000 RPM on a 0.25 kg vehicle with 8-inch rotors: Mach 0.88, C_T 1.8e-4.
         let note = stats(&[3000.0; 10])

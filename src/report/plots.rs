@@ -125,7 +125,7 @@ impl Figure<'_> {
         &self,
         root: &DrawingArea<DB, Shift>,
         title: &str,
-    ) -> Result<(), String> {
+    ) -> DrawResult<(), DB> {
         match self {
             Self::TimeHistories(s) => draw_time_histories(root, title, s),
             Self::Densities(d) => draw_densities(root, title, d),
@@ -148,13 +148,17 @@ fn write_both(stem: &Path, title: &str, figure: Figure) -> Result<Vec<PathBuf>, 
     let tmp_svg = stem.with_extension("svg.partial");
     {
         let root = SVGBackend::new(&tmp_svg, SIZE).into_drawing_area();
-        figure.draw(&root, title).map_err(|m| err(&svg, m))?;
+        figure
+            .draw(&root, title)
+            .map_err(|e| err(&svg, e.to_string()))?;
         root.present().map_err(|e| err(&svg, e.to_string()))?;
     }
     let tmp_png = stem.with_extension("partial.png");
     {
         let root = BitMapBackend::new(&tmp_png, SIZE).into_drawing_area();
-        figure.draw(&root, title).map_err(|m| err(&png, m))?;
+        figure
+            .draw(&root, title)
+            .map_err(|e| err(&png, e.to_string()))?;
         root.present().map_err(|e| err(&png, e.to_string()))?;
     }
     std::fs::rename(&tmp_svg, &svg).map_err(|e| err(&svg, e.to_string()))?;
@@ -209,11 +213,9 @@ pub fn effect_residuals(
 fn panels<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
-) -> Result<Vec<DrawingArea<DB, Shift>>, String> {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let root = root
-        .titled(title, (FONT, 30).into_font())
-        .map_err(|e| e.to_string())?;
+) -> DrawResult<Vec<DrawingArea<DB, Shift>>, DB> {
+    root.fill(&WHITE)?;
+    let root = root.titled(title, (FONT, 30).into_font())?;
     Ok(root.split_evenly((3, 2)))
 }
 
@@ -260,7 +262,7 @@ fn draw_time_histories<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     series: &[AxisSeries],
-) -> Result<(), String> {
+) -> DrawResult<(), DB> {
     for (area, s) in panels(root, title)?.iter().zip(series) {
         let (t0, t1) = range(s.t.iter().copied());
         let final_model = s.final_model.unwrap_or(&[]);
@@ -276,15 +278,13 @@ fn draw_time_histories<DB: DrawingBackend>(
             .x_label_area_size(45)
             .y_label_area_size(80)
             .caption(s.axis.name(), (FONT, 24))
-            .build_cartesian_2d(t0..t1, y0..y1)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(t0..t1, y0..y1)?;
         chart
             .configure_mesh()
             .x_desc("time [s]")
             .y_desc(format!("{} [{}]", s.axis.name(), s.axis.unit()))
             .label_style((FONT, 16))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         let lines = [
             (s.measured, BLACK, "measured"),
             (s.predicted, RED, "Eq. 22 model"),
@@ -298,15 +298,12 @@ fn draw_time_histories<DB: DrawingBackend>(
                     .draw_series(LineSeries::new(
                         first.iter().copied(),
                         colour.stroke_width(1),
-                    ))
-                    .map_err(|e| e.to_string())?
+                    ))?
                     .label(label)
                     .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour));
             }
             for run in runs {
-                chart
-                    .draw_series(LineSeries::new(run.iter().copied(), colour.stroke_width(1)))
-                    .map_err(|e| e.to_string())?;
+                chart.draw_series(LineSeries::new(run.iter().copied(), colour.stroke_width(1)))?;
             }
         }
         chart
@@ -314,8 +311,7 @@ fn draw_time_histories<DB: DrawingBackend>(
             .label_font((FONT, 16))
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
     }
     Ok(())
 }
@@ -350,7 +346,7 @@ fn draw_densities<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     axes: &[ResidualDensity],
-) -> Result<(), String> {
+) -> DrawResult<(), DB> {
     for (area, d) in panels(root, title)?.iter().zip(axes) {
         let (x0, x1) = range(d.edges.iter().copied());
         let peak = d.density.iter().copied().fold(0.0, f64::max);
@@ -365,29 +361,25 @@ fn draw_densities<DB: DrawingBackend>(
             .x_label_area_size(45)
             .y_label_area_size(80)
             .caption(format!("{} residual", d.axis.name()), (FONT, 24))
-            .build_cartesian_2d(x0..x1, 0.0..y1)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(x0..x1, 0.0..y1)?;
         chart
             .configure_mesh()
             .x_desc(format!("residual [{}]", d.axis.unit()))
             .y_desc(format!("probability density [1/{}]", d.axis.unit()))
             .label_style((FONT, 16))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         let bars = d
             .edges
             .windows(2)
             .zip(&d.density)
             .map(|(e, &h)| Rectangle::new([(e[0], 0.0), (e[1], h)], BLUE.mix(0.35).filled()));
-        chart.draw_series(bars).map_err(|e| e.to_string())?;
+        chart.draw_series(bars)?;
         if d.std > 0.0 {
             let curve = (0..=200).map(|i| {
                 let x = x0 + (x1 - x0) * i as f64 / 200.0;
                 (x, gaussian(x, d.mean, d.std))
             });
-            chart
-                .draw_series(LineSeries::new(curve, RED.stroke_width(2)))
-                .map_err(|e| e.to_string())?;
+            chart.draw_series(LineSeries::new(curve, RED.stroke_width(2)))?;
         }
     }
     Ok(())
@@ -397,7 +389,7 @@ fn draw_fold_r2<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     axes: &[FoldR2],
-) -> Result<(), String> {
+) -> DrawResult<(), DB> {
     for (area, f) in panels(root, title)?.iter().zip(axes) {
         let lowest = f.before.iter().chain(&f.after).copied().fold(0.0, f64::min);
         let y0 = (lowest.max(R2_FLOOR) / 25.0).floor() * 25.0;
@@ -407,8 +399,7 @@ fn draw_fold_r2<DB: DrawingBackend>(
             .x_label_area_size(45)
             .y_label_area_size(80)
             .caption(f.axis.name(), (FONT, 24))
-            .build_cartesian_2d(-0.5..n as f64 - 0.5, y0..100.0)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(-0.5..n as f64 - 0.5, y0..100.0)?;
         let names = f.folds.clone();
         chart
             .configure_mesh()
@@ -431,14 +422,13 @@ fn draw_fold_r2<DB: DrawingBackend>(
             })
             .y_desc("held-out R² [%]")
             .label_style((FONT, 16))
-            .draw()
-            .map_err(|e| e.to_string())?;
+            .draw()?;
         for (values, colour, offset) in [(&f.before, RED, -0.4), (&f.after, BLUE, 0.0)] {
             let bars = values.iter().enumerate().map(move |(k, &r2)| {
                 let x = k as f64 + offset;
                 Rectangle::new([(x, y0.max(r2)), (x + 0.4, 0.0)], colour.mix(0.6).filled())
             });
-            chart.draw_series(bars).map_err(|e| e.to_string())?;
+            chart.draw_series(bars)?;
             let clipped =
                 values
                     .iter()
@@ -451,7 +441,7 @@ fn draw_fold_r2<DB: DrawingBackend>(
                             (FONT, 14).into_font(),
                         )
                     });
-            chart.draw_series(clipped).map_err(|e| e.to_string())?;
+            chart.draw_series(clipped)?;
         }
     }
     Ok(())
@@ -461,7 +451,7 @@ fn draw_effects<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     effects: &[EffectResidual],
-) -> Result<(), String> {
+) -> DrawResult<(), DB> {
     for (area, e) in panels(root, title)?.iter().zip(effects) {
         let (x0, x1) = range(e.load.iter().copied());
         let (y0, y1) = range(e.before.iter().chain(e.after).chain(e.load).copied());
@@ -471,24 +461,18 @@ fn draw_effects<DB: DrawingBackend>(
             .x_label_area_size(45)
             .y_label_area_size(80)
             .caption(format!("{caption} ({})", e.axis.name()), (FONT, 20))
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|err| err.to_string())?;
+            .build_cartesian_2d(x0..x1, y0..y1)?;
         chart
             .configure_mesh()
             .x_desc(format!("effect's load [{}]", e.axis.unit()))
             .y_desc(format!("residual [{}]", e.axis.unit()))
             .label_style((FONT, 16))
-            .draw()
-            .map_err(|err| err.to_string())?;
+            .draw()?;
         for (values, colour) in [(e.before, RED), (e.after, BLUE)] {
             let points = e.load.iter().zip(values).map(|(&x, &y)| (x, y));
-            chart
-                .draw_series(points.map(|p| Circle::new(p, 2, colour.mix(0.5).filled())))
-                .map_err(|err| err.to_string())?;
+            chart.draw_series(points.map(|p| Circle::new(p, 2, colour.mix(0.5).filled())))?;
         }
-        chart
-            .draw_series(LineSeries::new([(x0, x0), (x1, x1)], BLACK.stroke_width(1)))
-            .map_err(|err| err.to_string())?;
+        chart.draw_series(LineSeries::new([(x0, x0), (x1, x1)], BLACK.stroke_width(1)))?;
     }
     Ok(())
 }
@@ -497,7 +481,7 @@ fn draw_normal_probability<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
     axes: &[NormalProbability],
-) -> Result<(), String> {
+) -> DrawResult<(), DB> {
     for (area, np) in panels(root, title)?.iter().zip(axes) {
         let (x0, x1) = range(np.points.iter().map(|p| p.0));
         let (y0, y1) = range(np.points.iter().map(|p| p.1));
@@ -509,18 +493,14 @@ fn draw_normal_probability<DB: DrawingBackend>(
                 format!("{} (correlation {:.4})", np.axis.name(), np.correlation),
                 (FONT, 24),
             )
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| e.to_string())?;
+            .build_cartesian_2d(x0..x1, y0..y1)?;
         chart
             .configure_mesh()
             .x_desc("standard normal quantile [-]")
             .y_desc(format!("ordered residual [{}]", np.axis.unit()))
             .label_style((FONT, 16))
-            .draw()
-            .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(np.points.iter().map(|&p| Circle::new(p, 2, BLUE.filled())))
-            .map_err(|e| e.to_string())?;
+            .draw()?;
+        chart.draw_series(np.points.iter().map(|&p| Circle::new(p, 2, BLUE.filled())))?;
     }
     Ok(())
 }

@@ -72,6 +72,42 @@ pub struct BladeDescription {
     pub airfoil: Airfoil,
 }
 
+/// A blade that cannot be used: a value out of range, or no hover trim.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BladeError {
+    /// A rotor-file value out of its range.
+    #[error("field `{field}`{}: {requirement}", value.map(|v| format!(" = {v}")).unwrap_or_default())]
+    Field {
+        /// The rotor-file key.
+        field: &'static str,
+        /// Its value, when the message names it.
+        value: Option<f64>,
+        /// What it must satisfy, e.g. `must be finite`.
+        requirement: &'static str,
+    },
+    /// A negative drag-polar coefficient.
+    #[error("fields `cd0`, `cd2`: must be >= 0")]
+    DragPolar,
+    /// No collective pitch up to 0.8 rad gives the hover thrust.
+    #[error(
+        "cannot trim the rotor for hover: thrust {thrust:.3} N needs more than 0.8 rad of pitch at {omega:.1} rad/s"
+    )]
+    Trim {
+        /// Hover thrust of one rotor, N.
+        thrust: f64,
+        /// Rotor speed, rad/s.
+        omega: f64,
+    },
+    /// The blade does not give the hover thrust below a 400 m/s tip speed.
+    #[error(
+        "the rotor cannot lift {thrust:.3} N below a tip speed of 400 m/s; increase `theta0` or `chord`"
+    )]
+    NoHoverSpeed {
+        /// Hover thrust of one rotor, N.
+        thrust: f64,
+    },
+}
+
 /// Default solidity N_b c / (πR) of the sized rotor.
 pub const DEFAULT_SOLIDITY: f64 = 0.1;
 /// Default hover blade loading C_T/σ (C_T = T / (ρπR²(ΩR)²)); 0.1 is a typical
@@ -112,12 +148,19 @@ impl BladeDescription {
     /// root cutout 0.1 R, and θ0 trimmed so that the hover thrust of each rotor equals
     /// m g / N at the tip speed giving C_T/σ = 0.1. `overrides` replace any value.
     /// Returns the blade and its hover rotor speed (rad/s).
-    pub fn sized_for(vehicle: &Vehicle, overrides: &BladeOverrides) -> Result<(Self, f64), String> {
+    pub fn sized_for(
+        vehicle: &Vehicle,
+        overrides: &BladeOverrides,
+    ) -> Result<(Self, f64), BladeError> {
         let p = &vehicle.props;
         let r = p.rotor_radius;
         let blades = overrides.blades.unwrap_or(2);
         if blades == 0 {
-            return Err("field `blades`: must be at least 1".into());
+            return Err(BladeError::Field {
+                field: "blades",
+                value: None,
+                requirement: "must be at least 1",
+            });
         }
         let chord = overrides
             .chord
@@ -141,7 +184,13 @@ impl BladeDescription {
         let solidity = blade.blades as f64 * blade.chord / (PI * r);
         let tip = match overrides.hover_tip_speed {
             Some(v) if v.is_finite() && v > 0.0 => v,
-            Some(v) => return Err(format!("field `hover_tip_speed` = {v}: must be > 0")),
+            Some(v) => {
+                return Err(BladeError::Field {
+                    field: "hover_tip_speed",
+                    value: Some(v),
+                    requirement: "must be > 0",
+                });
+            }
             None => (thrust
                 / (p.air_density * PI * r * r * solidity * DEFAULT_HOVER_BLADE_LOADING))
                 .sqrt(),
@@ -149,7 +198,13 @@ impl BladeDescription {
         let omega = tip / r;
         match overrides.theta0 {
             Some(t) if t.is_finite() => blade.theta0 = t,
-            Some(t) => return Err(format!("field `theta0` = {t}: must be finite")),
+            Some(t) => {
+                return Err(BladeError::Field {
+                    field: "theta0",
+                    value: Some(t),
+                    requirement: "must be finite",
+                });
+            }
             None => blade.theta0 = blade.trim_theta0(vehicle, omega, thrust)?,
         }
         let hover_omega = if overrides.theta0.is_some() {
@@ -160,12 +215,17 @@ impl BladeDescription {
         Ok((blade, hover_omega))
     }
 
-    fn check(&self) -> Result<(), String> {
-        let pos = |name: &str, v: f64| {
+    fn check(&self) -> Result<(), BladeError> {
+        let field = |field, value, requirement| BladeError::Field {
+            field,
+            value,
+            requirement,
+        };
+        let pos = |name, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(format!("field `{name}` = {v}: must be a finite number > 0"))
+                Err(field(name, Some(v), "must be a finite number > 0"))
             }
         };
         pos("chord", self.chord)?;
@@ -173,29 +233,31 @@ impl BladeDescription {
         pos("stall_angle", self.airfoil.stall_angle)?;
         pos("cd_flat_plate", self.airfoil.cd_flat_plate)?;
         if self.airfoil.stall_angle >= PI / 4.0 {
-            return Err(format!(
-                "field `stall_angle` = {}: must be below pi/4 rad",
-                self.airfoil.stall_angle
+            return Err(field(
+                "stall_angle",
+                Some(self.airfoil.stall_angle),
+                "must be below pi/4 rad",
             ));
         }
         if !(self.airfoil.cd0 >= 0.0 && self.airfoil.cd2 >= 0.0) {
-            return Err("fields `cd0`, `cd2`: must be >= 0".into());
+            return Err(BladeError::DragPolar);
         }
         if !(0.0..0.9).contains(&self.root_cutout) {
-            return Err(format!(
-                "field `root_cutout` = {}: must be in [0, 0.9)",
-                self.root_cutout
+            return Err(field(
+                "root_cutout",
+                Some(self.root_cutout),
+                "must be in [0, 0.9)",
             ));
         }
         if !self.theta_tw.is_finite() {
-            return Err("field `theta_tw`: must be finite".into());
+            return Err(field("theta_tw", None, "must be finite"));
         }
         Ok(())
     }
 
     /// θ0 that gives hover thrust `thrust` (N) at rotor speed `omega` (rad/s), by bisection
     /// on the blade-element thrust with momentum inflow.
-    fn trim_theta0(&self, vehicle: &Vehicle, omega: f64, thrust: f64) -> Result<f64, String> {
+    fn trim_theta0(&self, vehicle: &Vehicle, omega: f64, thrust: f64) -> Result<f64, BladeError> {
         let (mut lo, mut hi) = (-0.2, 0.8);
         let mut b = self.clone();
         for _ in 0..80 {
@@ -208,21 +270,17 @@ impl BladeDescription {
         }
         b.theta0 = 0.5 * (lo + hi);
         if (hover_thrust(&b, vehicle, omega) - thrust).abs() > 1e-6 * thrust {
-            return Err(format!(
-                "cannot trim the rotor for hover: thrust {thrust:.3} N needs more than 0.8 rad of pitch at {omega:.1} rad/s"
-            ));
+            return Err(BladeError::Trim { thrust, omega });
         }
         Ok(b.theta0)
     }
 
     /// Rotor speed (rad/s) at which hover thrust equals `thrust` (N), by bisection.
-    fn hover_speed(&self, vehicle: &Vehicle, thrust: f64) -> Result<f64, String> {
+    fn hover_speed(&self, vehicle: &Vehicle, thrust: f64) -> Result<f64, BladeError> {
         let r = vehicle.props.rotor_radius;
         let (mut lo, mut hi) = (1.0 / r, 400.0 / r);
         if hover_thrust(self, vehicle, hi) < thrust {
-            return Err(format!(
-                "the rotor cannot lift {thrust:.3} N below a tip speed of 400 m/s; increase `theta0` or `chord`"
-            ));
+            return Err(BladeError::NoHoverSpeed { thrust });
         }
         for _ in 0..80 {
             let mid = 0.5 * (lo + hi);

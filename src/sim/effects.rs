@@ -208,11 +208,68 @@ impl fmt::Display for Effect {
     }
 }
 
+/// An effect that cannot be parsed, or a set of effects the vehicle cannot take.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EffectError {
+    /// A parameter that is not a finite number.
+    #[error("effect `{effect}`: parameter {index} = {text:?} is not a finite number")]
+    NotANumber {
+        /// The effect's name as given.
+        effect: String,
+        /// The parameter's 1-based position.
+        index: usize,
+        /// The parameter as given.
+        text: String,
+    },
+    /// Too few or too many parameters.
+    #[error("effect `{effect}` takes {usage}, got {given} value(s)")]
+    Arity {
+        /// The effect's name.
+        effect: String,
+        /// Its usage, e.g. `` `wake_advance=k` ``.
+        usage: String,
+        /// Parameters given.
+        given: usize,
+    },
+    /// A parameter outside its range.
+    #[error("effect `{effect}`: {parameter} = {value} {requirement}")]
+    OutOfRange {
+        /// The effect's name.
+        effect: String,
+        /// The parameter's name.
+        parameter: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must satisfy, e.g. `must be in [0, 2]`.
+        requirement: &'static str,
+    },
+    /// A name that is none of [`EFFECT_NAMES`].
+    #[error("unknown effect `{name}`; known effects: {}", EFFECT_NAMES.join(", "))]
+    Unknown {
+        /// The name as given.
+        name: String,
+    },
+    /// An effect given twice.
+    #[error("effect `{effect}` given more than once")]
+    Repeated {
+        /// The effect's name.
+        effect: &'static str,
+    },
+    /// `weak_rotor` on a rotor the vehicle does not have.
+    #[error("effect `weak_rotor`: rotor {rotor} does not exist (the vehicle has {rotors} rotors)")]
+    NoSuchRotor {
+        /// The rotor number given (1-based).
+        rotor: usize,
+        /// The vehicle's rotor count.
+        rotors: usize,
+    },
+}
+
 impl FromStr for Effect {
-    type Err = String;
+    type Err = EffectError;
 
     /// Parses `NAME[=p1,p2,…]`; the error names the effect and the offending parameter.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, EffectError> {
         let (name, args) = match s.split_once('=') {
             Some((n, a)) => (n.trim(), Some(a)),
             None => (s.trim(), None),
@@ -227,12 +284,10 @@ impl FromStr for Effect {
                         .parse::<f64>()
                         .ok()
                         .filter(|v| v.is_finite())
-                        .ok_or_else(|| {
-                            format!(
-                                "effect `{name}`: parameter {} = {:?} is not a finite number",
-                                i + 1,
-                                x.trim()
-                            )
+                        .ok_or_else(|| EffectError::NotANumber {
+                            effect: name.to_string(),
+                            index: i + 1,
+                            text: x.trim().to_string(),
                         })
                 })
                 .collect::<Result<_, _>>()?,
@@ -241,19 +296,26 @@ impl FromStr for Effect {
             if n.contains(&values.len()) {
                 Ok(())
             } else {
-                Err(format!(
-                    "effect `{name}` takes {usage}, got {} value(s)",
-                    values.len()
-                ))
+                Err(EffectError::Arity {
+                    effect: name.to_string(),
+                    usage: usage.to_string(),
+                    given: values.len(),
+                })
             }
         };
-        let in_range = |what: &str, v: f64, ok: bool, req: &str| {
-            if ok {
-                Ok(v)
-            } else {
-                Err(format!("effect `{name}`: {what} = {v} {req}"))
-            }
-        };
+        let in_range =
+            |parameter: &'static str, value: f64, ok: bool, requirement: &'static str| {
+                if ok {
+                    Ok(value)
+                } else {
+                    Err(EffectError::OutOfRange {
+                        effect: name.to_string(),
+                        parameter,
+                        value,
+                        requirement,
+                    })
+                }
+            };
         let effect = match name {
             "ground_effect" => {
                 want(0..=1, "`ground_effect[=k]`")?;
@@ -396,10 +458,9 @@ impl FromStr for Effect {
                 }
             }
             other => {
-                return Err(format!(
-                    "unknown effect `{other}`; known effects: {}",
-                    EFFECT_NAMES.join(", ")
-                ));
+                return Err(EffectError::Unknown {
+                    name: other.to_string(),
+                });
             }
         };
         Ok(effect)
@@ -418,22 +479,24 @@ impl Effects {
     }
 
     /// Builds the set; refuses a kind given twice and rotor numbers beyond the vehicle.
-    pub fn new(effects: Vec<Effect>, vehicle: &Vehicle) -> Result<Self, String> {
+    pub fn new(effects: Vec<Effect>, vehicle: &Vehicle) -> Result<Self, EffectError> {
         let mut v = effects;
         v.sort_by_key(|e| EFFECT_NAMES.iter().position(|n| *n == e.name()));
         for pair in v.windows(2) {
             if pair[0].name() == pair[1].name() {
-                return Err(format!("effect `{}` given more than once", pair[0].name()));
+                return Err(EffectError::Repeated {
+                    effect: pair[0].name(),
+                });
             }
         }
         for e in &v {
             if let Effect::WeakRotor { rotor, .. } = e
                 && *rotor > vehicle.rotor_count()
             {
-                return Err(format!(
-                    "effect `weak_rotor`: rotor {rotor} does not exist (the vehicle has {} rotors)",
-                    vehicle.rotor_count()
-                ));
+                return Err(EffectError::NoSuchRotor {
+                    rotor: *rotor,
+                    rotors: vehicle.rotor_count(),
+                });
             }
         }
         Ok(Self(v))

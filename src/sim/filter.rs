@@ -31,6 +31,28 @@ pub struct Section {
     pub a: [f64; 2],
 }
 
+/// A low-pass that cannot be designed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FilterError {
+    /// An order outside 1..=8.
+    #[error("Butterworth order {order}: must be 1 to 8")]
+    Order {
+        /// The order asked for.
+        order: usize,
+    },
+    /// A cut-off not above 0 and below half the sample rate.
+    #[error(
+        "Butterworth cut-off {cutoff} Hz: must be above 0 and below half the sample rate ({} Hz)",
+        0.5 * rate
+    )]
+    CutOff {
+        /// The cut-off asked for, Hz.
+        cutoff: f64,
+        /// The sample rate, Hz.
+        rate: f64,
+    },
+}
+
 /// A digital Butterworth low-pass as a cascade of [`Section`]s.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Butterworth {
@@ -44,15 +66,12 @@ impl Butterworth {
     /// The order-`order` low-pass with cut-off `cutoff` (Hz) at sample rate `rate` (Hz),
     /// by the bilinear transform with pre-warping (module documentation). Refuses an
     /// order outside 1..=8 and a cut-off outside (0, rate/2).
-    pub fn low_pass(order: usize, cutoff: f64, rate: f64) -> Result<Self, String> {
+    pub fn low_pass(order: usize, cutoff: f64, rate: f64) -> Result<Self, FilterError> {
         if !(1..=8).contains(&order) {
-            return Err(format!("Butterworth order {order}: must be 1 to 8"));
+            return Err(FilterError::Order { order });
         }
         if !(cutoff > 0.0 && cutoff < 0.5 * rate) {
-            return Err(format!(
-                "Butterworth cut-off {cutoff} Hz: must be above 0 and below half the sample rate ({} Hz)",
-                0.5 * rate
-            ));
+            return Err(FilterError::CutOff { cutoff, rate });
         }
         let k = (PI * cutoff / rate).tan();
         let k2 = k * k;
@@ -122,7 +141,7 @@ impl Butterworth {
 
 /// Zero-phase Butterworth low-pass of `x` sampled at `rate` (Hz): order `order`, cut-off
 /// `cutoff` (Hz), see [`Butterworth::filtfilt`].
-pub fn smooth(x: &[f64], order: usize, cutoff: f64, rate: f64) -> Result<Vec<f64>, String> {
+pub fn smooth(x: &[f64], order: usize, cutoff: f64, rate: f64) -> Result<Vec<f64>, FilterError> {
     Ok(Butterworth::low_pass(order, cutoff, rate)?.filtfilt(x))
 }
 
@@ -232,11 +251,14 @@ mod tests {
 
     #[test]
     fn bad_designs_are_refused() {
-        assert!(Butterworth::low_pass(0, 5.0, 100.0).is_err());
-        assert!(
-            Butterworth::low_pass(2, 50.0, 100.0)
-                .unwrap_err()
-                .contains("half")
+        assert_eq!(
+            Butterworth::low_pass(0, 5.0, 100.0),
+            Err(FilterError::Order { order: 0 })
+        );
+        let e = Butterworth::low_pass(2, 50.0, 100.0).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "Butterworth cut-off 50 Hz: must be above 0 and below half the sample rate (50 Hz)"
         );
         assert!(Butterworth::low_pass(2, 0.0, 100.0).is_err());
     }

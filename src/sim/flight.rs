@@ -27,7 +27,7 @@ use rand::{RngExt, SeedableRng};
 
 use super::controller::{Controller, Gains, Reference};
 use super::disturbance::TrimMoment;
-use super::filter::Butterworth;
+use super::filter::{Butterworth, FilterError};
 use super::inflow::InflowState;
 use super::output::LogTable;
 use super::sensors::{SensorConfig, Sensors, lag_step};
@@ -368,17 +368,70 @@ impl Dynamics<'_> {
     }
 }
 
+/// Why a flight cannot be flown, or diverged.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FlightError {
+    /// A duration, step or log rate that is not positive.
+    #[error("flight: duration, step and log rate must be > 0")]
+    NotPositive,
+    /// A log period that is not a whole number of integration steps.
+    #[error(
+        "flight: the log period 1/{log_rate} s must be a whole number of integration steps of {step} s"
+    )]
+    LogPeriod {
+        /// Log rate, Hz.
+        log_rate: f64,
+        /// Integration step, s.
+        step: f64,
+    },
+    /// The `smoothed_loads` filter cannot be designed at the log rate.
+    #[error("effect `smoothed_loads` at the log rate {log_rate} Hz: {source}")]
+    Smoothing {
+        /// Log rate, Hz.
+        log_rate: f64,
+        /// Why the filter cannot be designed.
+        source: FilterError,
+    },
+    /// An `inflow_lag` time constant shorter than the integration step.
+    #[error(
+        "effect `inflow_lag`: tau = {lag} s is shorter than the integration step {step} s; use a step (`--step`) of at most {lag} s"
+    )]
+    InflowLag {
+        /// The time constant, s.
+        lag: f64,
+        /// Integration step, s.
+        step: f64,
+    },
+    /// The vehicle's inertia matrix has no inverse.
+    #[error("flight: singular inertia")]
+    SingularInertia,
+    /// The vehicle tipped over, hit the ground, left the reference or went non-finite.
+    #[error(
+        "flight diverged at t = {t:.3} s: tilt {tilt:.1} deg, {distance:.2} m from the reference, height {height:.2} m"
+    )]
+    Diverged {
+        /// Time, s.
+        t: f64,
+        /// Tilt of the body z axis from the vertical, deg.
+        tilt: f64,
+        /// Distance from the reference position, m.
+        distance: f64,
+        /// Height, m.
+        height: f64,
+    },
+}
+
 /// Integration steps per log period; refuses periods that are not a whole number of steps.
-fn steps_per_log(config: &FlightConfig) -> Result<usize, String> {
+fn steps_per_log(config: &FlightConfig) -> Result<usize, FlightError> {
     if !(config.step > 0.0 && config.duration > 0.0 && config.log_rate > 0.0) {
-        return Err("flight: duration, step and log rate must be > 0".into());
+        return Err(FlightError::NotPositive);
     }
     let ratio = (1.0 / (config.step * config.log_rate)).round();
     if ratio < 1.0 || (ratio * config.step * config.log_rate - 1.0).abs() > 1e-9 {
-        return Err(format!(
-            "flight: the log period 1/{} s must be a whole number of integration steps of {} s",
-            config.log_rate, config.step
-        ));
+        return Err(FlightError::LogPeriod {
+            log_rate: config.log_rate,
+            step: config.step,
+        });
     }
     Ok(ratio as usize)
 }
@@ -399,17 +452,17 @@ fn hover_torque(model: &TruthModel) -> f64 {
 
 /// Flies `model` for `config` with seed `seed`; an error says when and how the flight
 /// diverged (tilt beyond 90°, ground contact, or 50 s² m from the reference).
-pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<FlightLog, String> {
+pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<FlightLog, FlightError> {
     let ratio = steps_per_log(config)?;
     let smoothing = load_smoothing(model, config)?;
     let inflow_lag = model.effects.inflow_lag();
     if let Some(lag) = inflow_lag
         && lag < config.step
     {
-        return Err(format!(
-            "effect `inflow_lag`: tau = {lag} s is shorter than the integration step {} s; use a step (`--step`) of at most {lag} s",
-            config.step
-        ));
+        return Err(FlightError::InflowLag {
+            lag,
+            step: config.step,
+        });
     }
     let vehicle = &model.vehicle;
     let n = vehicle.rotor_count();
@@ -421,7 +474,7 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
     let dynamics = Dynamics {
         model,
         inertia,
-        inertia_inv: inertia.try_inverse().ok_or("flight: singular inertia")?,
+        inertia_inv: inertia.try_inverse().ok_or(FlightError::SingularInertia)?,
         wind: Vector3::new(wind[0], wind[1], wind[2]),
         trim: model
             .effects
@@ -517,11 +570,12 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
             && -x[2] > 0.0
             && x.iter().all(|v| v.is_finite()))
         {
-            return Err(format!(
-                "flight diverged at t = {t:.3} s: tilt {:.1} deg, {err:.2} m from the reference, height {:.2} m",
-                tilt.to_degrees(),
-                -x[2]
-            ));
+            return Err(FlightError::Diverged {
+                t,
+                tilt: tilt.to_degrees(),
+                distance: err,
+                height: -x[2],
+            });
         }
         if step % ratio == 0 {
             log_sample(
@@ -569,16 +623,16 @@ pub fn fly(model: &TruthModel, config: &FlightConfig, seed: u64) -> Result<Fligh
 fn load_smoothing(
     model: &TruthModel,
     config: &FlightConfig,
-) -> Result<Option<Butterworth>, String> {
+) -> Result<Option<Butterworth>, FlightError> {
     model
         .effects
         .smoothed_loads()
         .map(|(cutoff, order)| {
-            Butterworth::low_pass(order, cutoff, config.log_rate).map_err(|e| {
-                format!(
-                    "effect `smoothed_loads` at the log rate {} Hz: {e}",
-                    config.log_rate
-                )
+            Butterworth::low_pass(order, cutoff, config.log_rate).map_err(|source| {
+                FlightError::Smoothing {
+                    log_rate: config.log_rate,
+                    source,
+                }
             })
         })
         .transpose()

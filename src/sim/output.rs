@@ -8,7 +8,7 @@
 //! byte-for-byte reproducible.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::sample::SampleChunk;
 
@@ -112,9 +112,11 @@ impl LogTable {
 
     /// Writes the CSV to `path` atomically: a temporary file in the same directory,
     /// flushed and renamed over `path`, so a failed run leaves no partial file.
-    pub fn write_csv(&self, path: &Path) -> Result<(), String> {
-        crate::util::write_atomically(path, &self.to_csv_bytes())
-            .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+    pub fn write_csv(&self, path: &Path) -> Result<(), CsvWriteError> {
+        crate::util::write_atomically(path, &self.to_csv_bytes()).map_err(|source| CsvWriteError {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 }
 
@@ -127,6 +129,16 @@ pub fn round_time(t: f64) -> f64 {
     }
     // An integer count of µs over 10⁶, both exact: one correctly rounded division.
     micro / 1e6
+}
+
+/// A log CSV that could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: cannot write: {source}", path.display())]
+pub struct CsvWriteError {
+    /// The file.
+    pub path: PathBuf,
+    /// The operating system's error.
+    pub source: std::io::Error,
 }
 
 /// `x` rounded to [`SIGNIFICANT_DIGITS`] significant digits (−0 becomes 0).

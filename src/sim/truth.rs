@@ -4,11 +4,13 @@
 //! quasi-steady inflow, or with `inflow_lag` at an induced velocity the flight carries as
 //! a state ([`TruthModel::wrench_lagged_inflow`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::blade_element::{BladeDescription, BladeElementRotor, BladeOverrides, RotorKinematics};
+use super::blade_element::{
+    BladeDescription, BladeElementRotor, BladeError, BladeOverrides, RotorKinematics,
+};
 use super::effects::{
     Effects, ground_effect_ratio, vortex_ring_factor, wake_advance_factors, wake_factors,
 };
@@ -38,6 +40,51 @@ pub struct RotorFile {
     pub azimuth_stations: Option<usize>,
 }
 
+/// Why a rotor file, or the truth model's rotor built from its values, cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum RotorError {
+    /// The file could not be read.
+    #[error("cannot read file: {0}")]
+    Read(std::io::Error),
+    /// Not TOML, or a key that is unknown or of the wrong type.
+    #[error("TOML error{}: {message}", line.map(|l| format!(" on line {l}")).unwrap_or_default())]
+    Toml {
+        /// 1-based line of the offending key, when known.
+        line: Option<usize>,
+        /// The TOML parser's message.
+        message: String,
+    },
+    /// A blade value out of range, or a blade that cannot hover.
+    #[error(transparent)]
+    Blade(#[from] BladeError),
+    /// Quadrature station counts out of range.
+    #[error(
+        "fields `radial_stations` = {radial}, `azimuth_stations` = {azimuthal}: need 2..=64 and 4..=256"
+    )]
+    Stations {
+        /// Radial stations.
+        radial: usize,
+        /// Azimuth stations.
+        azimuthal: usize,
+    },
+    /// A linear drag coefficient that is negative or not finite.
+    #[error("field `linear_drag` = {0:?}: must be finite and >= 0")]
+    LinearDrag([f64; 3]),
+    /// A motor time constant that is not positive.
+    #[error("field `motor_time_constant` = {0}: must be > 0 s")]
+    MotorTimeConstant(f64),
+}
+
+/// A [`RotorError`] of the rotor file `path`.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct RotorFileError {
+    /// The rotor file.
+    pub path: PathBuf,
+    /// What is wrong with it.
+    pub source: RotorError,
+}
+
 /// The file as written: one flat table (no serde flatten, so TOML errors keep the
 /// position of the offending field).
 #[derive(Debug, Deserialize)]
@@ -62,20 +109,20 @@ struct RotorFileToml {
 
 impl RotorFile {
     /// Reads a rotor file; errors name the file, the line and the field.
-    pub fn from_toml_file(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("{}: cannot read file: {e}", path.display()))?;
-        Self::from_toml_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+    pub fn from_toml_file(path: &Path) -> Result<Self, RotorFileError> {
+        let in_file = |source| RotorFileError {
+            path: path.to_path_buf(),
+            source,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| in_file(RotorError::Read(e)))?;
+        Self::from_toml_str(&text).map_err(in_file)
     }
 
     /// Parses rotor-file text.
-    pub fn from_toml_str(text: &str) -> Result<Self, String> {
-        let f: RotorFileToml = toml::from_str(text).map_err(|e| {
-            let at = e
-                .span()
-                .map(|s| format!(" on line {}", line_of(text, s.start)))
-                .unwrap_or_default();
-            format!("TOML error{at}: {}", e.message().trim())
+    pub fn from_toml_str(text: &str) -> Result<Self, RotorError> {
+        let f: RotorFileToml = toml::from_str(text).map_err(|e| RotorError::Toml {
+            line: e.span().map(|s| line_of(text, s.start)),
+            message: e.message().trim().to_string(),
         })?;
         Ok(Self {
             blade: BladeOverrides {
@@ -139,29 +186,23 @@ pub struct TruthModel {
 
 impl TruthModel {
     /// Builds the truth model of `vehicle` with the rotor file values `file` and `effects`.
-    pub fn new(vehicle: &Vehicle, file: &RotorFile, effects: Effects) -> Result<Self, String> {
+    pub fn new(vehicle: &Vehicle, file: &RotorFile, effects: Effects) -> Result<Self, RotorError> {
         let (blade, hover_omega) = BladeDescription::sized_for(vehicle, &file.blade)?;
         let radial = file.radial_stations.unwrap_or(DEFAULT_RADIAL_STATIONS);
         let azimuthal = file.azimuth_stations.unwrap_or(DEFAULT_AZIMUTH_STATIONS);
         if !(2..=64).contains(&radial) || !(4..=256).contains(&azimuthal) {
-            return Err(format!(
-                "fields `radial_stations` = {radial}, `azimuth_stations` = {azimuthal}: need 2..=64 and 4..=256"
-            ));
+            return Err(RotorError::Stations { radial, azimuthal });
         }
         let rotor = BladeElementRotor::new(blade, vehicle, radial, azimuthal);
         let ell = vehicle.arm_length();
         let k = 0.5 * vehicle.props.air_density * vehicle.hover_induced_velocity() * ell * ell;
         let linear_drag = file.linear_drag.unwrap_or([0.25 * k, 0.25 * k, 0.5 * k]);
         if linear_drag.iter().any(|d| !(d.is_finite() && *d >= 0.0)) {
-            return Err(format!(
-                "field `linear_drag` = {linear_drag:?}: must be finite and >= 0"
-            ));
+            return Err(RotorError::LinearDrag(linear_drag));
         }
         let tau = file.motor_time_constant.unwrap_or(0.03);
         if !(tau.is_finite() && tau > 0.0) {
-            return Err(format!(
-                "field `motor_time_constant` = {tau}: must be > 0 s"
-            ));
+            return Err(RotorError::MotorTimeConstant(tau));
         }
         let d = effects.cg_offset();
         let hubs = (0..vehicle.rotor_count())

@@ -110,9 +110,7 @@ pub(super) fn check_layout(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErr
             ),
         );
     }
-    check_mixing_rank(rotors, arm, tol)
-        .map(|()| arm)
-        .or_else(|detail| fail("independent thrust, roll, pitch and yaw", detail))
+    check_mixing_rank(rotors, arm, tol).map(|()| arm)
 }
 
 /// The rows 1, y_i, x_i, σ_i of the mixing matrix (Eq. 20, lengths over ℓ) must be linearly
@@ -120,7 +118,7 @@ pub(super) fn check_layout(rotors: &[Rotor], tol: f64) -> Result<f64, VehicleErr
 /// (e.g. spins following the sign of y_i couple yaw to roll). Smallest singular value
 /// relative to the largest at most `tol` counts as dependent; the error names the
 /// dependency.
-fn check_mixing_rank(rotors: &[Rotor], arm: f64, tol: f64) -> Result<(), String> {
+fn check_mixing_rank(rotors: &[Rotor], arm: f64, tol: f64) -> Result<(), VehicleErrorKind> {
     let n = rotors.len();
     let m = nalgebra::DMatrix::from_fn(n, 4, |i, c| match c {
         0 => 1.0,
@@ -145,10 +143,13 @@ fn check_mixing_rank(rotors: &[Rotor], arm: f64, tol: f64) -> Result<(), String>
         .filter(|(x, _)| x.abs() > 1e-6 * big)
         .map(|(x, name)| format!("{:+.3}*{name}", x / big))
         .collect();
-    Err(format!(
-        "the mixing matrix (Eq. 20) has rank 3: {} = 0 for every rotor (l = {arm:.4} m), so the rotors cannot produce thrust, roll, pitch and yaw moment independently",
-        combo.join(" ")
-    ))
+    Err(VehicleErrorKind::Assumption2 {
+        condition: "independent thrust, roll, pitch and yaw",
+        detail: format!(
+            "the mixing matrix (Eq. 20) has rank 3: {} = 0 for every rotor (l = {arm:.4} m), so the rotors cannot produce thrust, roll, pitch and yaw moment independently",
+            combo.join(" ")
+        ),
+    })
 }
 
 /// The conditions of Assumption 2 beyond those [`check_layout`] enforces: equal arms,

@@ -85,14 +85,69 @@ pub fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(&b[..end]).into_owned()
 }
 
+/// Why the body of an `FMT` message does not define a format.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FmtError {
+    /// A body shorter than an `FMT` body.
+    #[error("FMT body has {bytes} bytes, {} expected", FMT_BODY_BYTES)]
+    Short {
+        /// Bytes in the body.
+        bytes: usize,
+    },
+    /// A message name that is empty or not printable ASCII.
+    #[error("FMT of type {ty}: name {name:?} is not printable ASCII")]
+    Name {
+        /// The type defined.
+        ty: u8,
+        /// The name.
+        name: String,
+    },
+    /// Not one label per format character.
+    #[error("FMT of {name} (type {ty}): {codes} format characters but {labels} labels")]
+    LabelCount {
+        /// The message name.
+        name: String,
+        /// The type defined.
+        ty: u8,
+        /// Format characters.
+        codes: usize,
+        /// Labels.
+        labels: usize,
+    },
+    /// A format character the reader does not know.
+    #[error("FMT of {name} (type {ty}): unknown format character {code:?} of field {label:?}")]
+    UnknownCode {
+        /// The message name.
+        name: String,
+        /// The type defined.
+        ty: u8,
+        /// The character.
+        code: char,
+        /// The field's label.
+        label: String,
+    },
+    /// A length that is not the fields' bytes plus the header.
+    #[error(
+        "FMT of {name} (type {ty}): length {length} bytes, but its fields take {fields} + {} header bytes",
+        HEADER_BYTES
+    )]
+    Length {
+        /// The message name.
+        name: String,
+        /// The type defined.
+        ty: u8,
+        /// The length declared, header included, bytes.
+        length: usize,
+        /// The fields' bytes.
+        fields: usize,
+    },
+}
+
 /// Parses the body of an `FMT` message (type, length, name, format, labels): the type
 /// it defines and its format, or what is wrong.
-pub fn parse_fmt(body: &[u8]) -> Result<(u8, Format), String> {
+pub fn parse_fmt(body: &[u8]) -> Result<(u8, Format), FmtError> {
     if body.len() < FMT_BODY_BYTES {
-        return Err(format!(
-            "FMT body has {} bytes, {FMT_BODY_BYTES} expected",
-            body.len()
-        ));
+        return Err(FmtError::Short { bytes: body.len() });
     }
     let (ty, length) = (body[0], body[1] as usize);
     let name = text(&body[2..6]);
@@ -103,9 +158,7 @@ pub fn parse_fmt(body: &[u8]) -> Result<(u8, Format), String> {
         .collect();
     let labels = text(&body[22..86]);
     if name.is_empty() || !name.bytes().all(|c| c.is_ascii_graphic()) {
-        return Err(format!(
-            "FMT of type {ty}: name {name:?} is not printable ASCII"
-        ));
+        return Err(FmtError::Name { ty, name });
     }
     let labels: Vec<&str> = if labels.is_empty() {
         Vec::new()
@@ -113,20 +166,21 @@ pub fn parse_fmt(body: &[u8]) -> Result<(u8, Format), String> {
         labels.split(',').collect()
     };
     if labels.len() != codes.len() {
-        return Err(format!(
-            "FMT of {name} (type {ty}): {} format characters but {} labels",
-            codes.len(),
-            labels.len()
-        ));
+        return Err(FmtError::LabelCount {
+            name,
+            ty,
+            codes: codes.len(),
+            labels: labels.len(),
+        });
     }
     let mut offset = 0;
     let mut fields = Vec::with_capacity(codes.len());
     for (&code, label) in codes.iter().zip(labels) {
-        let kind = kind_of(code).ok_or_else(|| {
-            format!(
-                "FMT of {name} (type {ty}): unknown format character {:?} of field {label:?}",
-                code as char
-            )
+        let kind = kind_of(code).ok_or_else(|| FmtError::UnknownCode {
+            name: name.clone(),
+            ty,
+            code: code as char,
+            label: label.to_string(),
         })?;
         fields.push(Field {
             label: label.to_string(),
@@ -137,9 +191,12 @@ pub fn parse_fmt(body: &[u8]) -> Result<(u8, Format), String> {
         offset += kind.size();
     }
     if offset + HEADER_BYTES != length {
-        return Err(format!(
-            "FMT of {name} (type {ty}): length {length} bytes, but its fields take {offset} + {HEADER_BYTES} header bytes"
-        ));
+        return Err(FmtError::Length {
+            name,
+            ty,
+            length,
+            fields: offset,
+        });
     }
     Ok((
         ty,
@@ -285,9 +342,9 @@ mod tests {
                 "not printable",
             ),
         ] {
-            let e = parse_fmt(&body).unwrap_err();
+            let e = parse_fmt(&body).unwrap_err().to_string();
             assert!(e.contains(words), "{e}");
         }
-        assert!(parse_fmt(&body[..50]).unwrap_err().contains("50 bytes"));
+        assert_eq!(parse_fmt(&body[..50]), Err(FmtError::Short { bytes: 50 }));
     }
 }

@@ -3,12 +3,12 @@
 //! message's format is known, where those fields sit in its body, their value factors
 //! and the log's unit conversions.
 
-use super::super::align::topic_time;
+use super::super::align::{split_instance, topic_time};
 use super::super::error::{ErrorKind, IoError, Location, field, key};
 use super::super::mapping::{Mapping, Signal};
 use super::super::scalar::Scalar;
 use super::super::slots::SlotLayout;
-use super::super::units::unit_for;
+use super::super::units::{UnitError, unit_for};
 use super::format::{Format, Kind, UnitTables};
 
 /// A numeric field located in a message body: offset, type and factor to the value
@@ -38,17 +38,6 @@ pub(super) struct Topic {
     /// Messages of the name seen (any instance), and of this instance.
     pub seen: u64,
     pub messages: u64,
-}
-
-/// `NAME` or `NAME[k]`: the name and instance (0 when absent).
-pub(super) fn split_key(k: &str) -> Result<(&str, u8), String> {
-    match k.strip_suffix(']').and_then(|t| t.rsplit_once('[')) {
-        Some((name, i)) => i
-            .parse::<u8>()
-            .map(|i| (name, i))
-            .map_err(|_| format!("message {k:?}: instance {i:?} is not a number 0..=255")),
-        None => Ok((k, 0)),
-    }
 }
 
 /// The messages `mapping` maps onto the slots of `layout`. A field is a label of the
@@ -87,12 +76,12 @@ pub(super) fn mapped_topics(
         let idx = match topics.iter().position(|t| t.key == topic_key) {
             Some(i) => i,
             None => {
-                let (msg, instance) = split_key(&topic_key).map_err(|m| {
+                let (msg, instance) = split_instance(&topic_key, "message").map_err(|e| {
                     IoError::new(
                         file,
                         Location::File,
                         key(&format!("signals.{}", signal.key())),
-                        ErrorKind::Mapping(m),
+                        ErrorKind::Mapping(e.to_string()),
                     )
                 })?;
                 let time = topic_time(mapping, &topic_key, file, |p| Ok(p.to_string()))?
@@ -182,7 +171,8 @@ impl Topic {
             let map = mapping.get(signal);
             let own_unit = map.is_some_and(|m| m.unit.is_some() || m.actuator.is_some());
             let log_factor = match format.unit(k, tables) {
-                Some(u) if !own_unit => log_unit_factor(u, signal).map_err(|m| err(label, m))?,
+                Some(u) if !own_unit => log_unit_factor(u, signal)
+                    .map_err(|e| err(label, format!("the log's unit of this field: {e}")))?,
                 _ => 1.0,
             };
             fields.push((format.fields[k].offset, s, factor * log_factor));
@@ -198,14 +188,14 @@ impl Topic {
 /// The factor to SI of a log unit name (`UNIT` text: `rpm`, `deg/s`, `m/s/s`) for
 /// `signal`: 1 for names that are no unit of the crate (`instance`, `UNKNOWN`, ``); an
 /// error for a unit of another dimension.
-fn log_unit_factor(unit: &str, signal: Signal) -> Result<f64, String> {
+fn log_unit_factor(unit: &str, signal: Signal) -> Result<f64, UnitError> {
     if unit.is_empty() {
         return Ok(1.0);
     }
     let name = unit.replace("/s/s", "/s^2");
     match unit_for(&name, None, signal.dimension(), signal.key()) {
         Ok(u) => Ok(u.to_si),
-        Err(m) if m.contains("unknown unit") => Ok(1.0),
-        Err(m) => Err(format!("the log's unit of this field: {m}")),
+        Err(UnitError::Unknown { .. }) => Ok(1.0),
+        Err(e) => Err(e),
     }
 }

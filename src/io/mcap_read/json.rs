@@ -3,10 +3,10 @@
 
 use serde_json::Value;
 
-use super::super::field_path::{self, Step, Style};
+use super::super::field_path::{self, FieldPathError, Step, Style};
 
 /// Parses a JSON field path `a.b[2].c`.
-pub(super) fn parse_path(path: &str) -> Result<Vec<Step>, String> {
+pub(super) fn parse_path(path: &str) -> Result<Vec<Step>, FieldPathError> {
     field_path::parse(path, Style::Json)
 }
 

@@ -92,12 +92,12 @@ impl McapSource {
         for slot in 0..layout.len() {
             let name = layout.topic(slot).unwrap_or_default().to_string();
             let field_name = layout.source_name(slot).to_string();
-            let steps = parse_path(&field_name).map_err(|m| {
+            let steps = parse_path(&field_name).map_err(|e| {
                 IoError::new(
                     file,
                     Location::File,
                     field(&format!("{name}.{field_name}")),
-                    ErrorKind::Mapping(m),
+                    ErrorKind::Mapping(e.to_string()),
                 )
             })?;
             let idx = match topics.iter().position(|t| t.name == name) {
@@ -123,7 +123,7 @@ impl McapSource {
                         file,
                         Location::File,
                         super::error::key("time"),
-                        ErrorKind::Mapping(e),
+                        ErrorKind::Mapping(e.to_string()),
                     )
                 })?;
                 Some((steps, mapping.factor(Signal::Time)))
@@ -133,12 +133,18 @@ impl McapSource {
         for topic in &mut topics {
             topic.time = topic_time(mapping, &topic.name, file, parse_path)?.or(time_field.clone());
         }
-        let read_error = |m: String| IoError::new(file, Location::File, None, ErrorKind::Read(m));
-        let summary = indexed_summary(&mut handle, &topics).map_err(read_error)?;
+        let summary = indexed_summary(&mut handle, &topics).map_err(|e| {
+            IoError::new(file, Location::File, None, ErrorKind::Read(e.to_string()))
+        })?;
         let order = match &summary {
             Some(summary) => {
-                check_start(&mut handle).map_err(|m| {
-                    IoError::new(file, Location::Record(0), None, ErrorKind::Format(m))
+                check_start(&mut handle).map_err(|e| {
+                    IoError::new(
+                        file,
+                        Location::Record(0),
+                        None,
+                        ErrorKind::Format(e.to_string()),
+                    )
                 })?;
                 let options = IndexedReaderOptions::new()
                     .include_topics(topics.iter().map(|t| t.name.clone()))
@@ -264,7 +270,7 @@ impl McapSource {
                 let text = std::str::from_utf8(text)
                     .map_err(|_| fail("schema text is not UTF-8".into()))?;
                 let schema = super::ros2msg::parse_schema(name, text)
-                    .map_err(|m| fail(format!("schema {name}: {m}")))?;
+                    .map_err(|e| fail(format!("schema {name}: {e}")))?;
                 Ok(Decoder::Cdr(Box::new(schema)))
             }
             other => Err(fail(format!(
@@ -283,11 +289,11 @@ impl McapSource {
         let loc = Location::Record(index);
         let name = self.topics[topic].name.clone();
         let value: Value = match &self.topics[topic].decoder {
-            Decoder::Cdr(schema) => super::cdr::decode(schema, data).map_err(|m| {
+            Decoder::Cdr(schema) => super::cdr::decode(schema, data).map_err(|e| {
                 self.err(
                     loc,
                     field(&name),
-                    ErrorKind::Format(format!("invalid CDR: {m}")),
+                    ErrorKind::Format(format!("invalid CDR: {e}")),
                 )
             })?,
             _ => serde_json::from_slice(data).map_err(|e| {

@@ -26,12 +26,13 @@ pub(super) enum Order {
 
 /// The file's summary (channels, schemas, chunk indexes) when it has one that is
 /// readable, has chunk indexes and names every topic in `topics`; `None` otherwise (read
-/// in file order then). The file position is left at the start.
+/// in file order then). The file position is left at the start; an error is the file's
+/// size or the return to the start failing.
 pub(super) fn indexed_summary(
     handle: &mut File,
     topics: &[Topic],
-) -> Result<Option<mcap::Summary>, String> {
-    let size = handle.metadata().map_err(|e| e.to_string())?.len();
+) -> Result<Option<mcap::Summary>, std::io::Error> {
+    let size = handle.metadata()?.len();
     let mut reader = SummaryReader::new_with_options(
         SummaryReaderOptions::default()
             .with_file_size(size)
@@ -62,7 +63,7 @@ pub(super) fn indexed_summary(
             break;
         }
     }
-    handle.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
+    handle.seek(SeekFrom::Start(0))?;
     let summary = if readable { reader.finish() } else { None };
     Ok(summary.filter(|s| {
         !s.chunk_indexes.is_empty()
@@ -72,26 +73,37 @@ pub(super) fn indexed_summary(
     }))
 }
 
+/// Why the start of an indexed file is not that of an MCAP file.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum StartError {
+    /// The magic or header record is malformed.
+    #[error("MCAP: {0}")]
+    Mcap(#[from] mcap::McapError),
+    /// The file could not be read.
+    #[error(transparent)]
+    Read(#[from] std::io::Error),
+}
+
 /// Checks the start of the file (magic and header record) with the linear reader, as a
 /// file-order read would: reading through the index skips it.
-pub(super) fn check_start(handle: &mut File) -> Result<(), String> {
+pub(super) fn check_start(handle: &mut File) -> Result<(), StartError> {
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES),
     );
     let result = loop {
         match reader.next_event() {
             None => break Ok(()),
-            Some(Err(e)) => break Err(format!("MCAP: {e}")),
+            Some(Err(e)) => break Err(e.into()),
             Some(Ok(LinearReadEvent::Record { .. })) => break Ok(()),
             Some(Ok(LinearReadEvent::ReadRequest(need))) => {
                 match handle.read(reader.insert(need)) {
                     Ok(n) => reader.notify_read(n),
-                    Err(e) => break Err(e.to_string()),
+                    Err(e) => break Err(e.into()),
                 }
             }
         }
     };
-    handle.seek(SeekFrom::Start(0)).map_err(|e| e.to_string())?;
+    handle.seek(SeekFrom::Start(0))?;
     result
 }
 

@@ -221,7 +221,7 @@ impl LogReader {
                         .layout
                         .start(Signal::RotorSpeeds)
                         .and_then(|slot| self.convert.label(slot)),
-                    ErrorKind::Mapping(why),
+                    ErrorKind::Mapping(why.to_string()),
                 ));
             }
         }

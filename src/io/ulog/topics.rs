@@ -2,12 +2,12 @@
 //! which slots through which field paths, with which time field; and, once the topic
 //! is subscribed, where those fields sit in its data messages.
 
-use super::super::align::topic_time;
+use super::super::align::{split_instance, topic_time};
 use super::super::error::{ErrorKind, IoError, Location, field, key};
 use super::super::mapping::{Mapping, Signal};
 use super::super::scalar::Scalar;
 use super::super::slots::SlotLayout;
-use super::format::{Formats, parse_path, split_instance};
+use super::format::{Formats, parse_path};
 
 /// Where a mapped topic's time and fields sit in its data messages.
 pub(super) struct Located {
@@ -54,19 +54,22 @@ pub(super) fn mapped_topics(
     for slot in 0..layout.len() {
         let topic_key = layout.topic(slot).unwrap_or_default().to_string();
         let path = layout.source_name(slot).to_string();
-        parse_path(&path).map_err(|m| {
+        parse_path(&path).map_err(|e| {
             IoError::new(
                 file,
                 Location::File,
                 field(&format!("{topic_key}.{path}")),
-                ErrorKind::Mapping(m),
+                ErrorKind::Mapping(e.to_string()),
             )
         })?;
         let idx = match topics.iter().position(|t| t.key == topic_key) {
             Some(i) => i,
             None => {
-                let (name, instance) = split_instance(&topic_key).map_err(|m| {
-                    mapping_err(&format!("signals.{}", layout.signal_of_slot(slot).key()), m)
+                let (name, instance) = split_instance(&topic_key, "topic").map_err(|e| {
+                    mapping_err(
+                        &format!("signals.{}", layout.signal_of_slot(slot).key()),
+                        e.to_string(),
+                    )
                 })?;
                 let check = |path: &str| parse_path(path).map(|_| path.to_string());
                 let time = topic_time(mapping, &topic_key, file, check)?
@@ -100,12 +103,12 @@ impl Topic {
         offset: u64,
     ) -> Result<Located, IoError> {
         let locate = |path: &str| {
-            formats.locate(format, path).map_err(|m| {
+            formats.locate(format, path).map_err(|e| {
                 IoError::new(
                     file,
                     Location::Offset(offset),
                     field(&format!("{}.{path}", self.key)),
-                    ErrorKind::Mapping(m),
+                    ErrorKind::Mapping(e.to_string()),
                 )
             })
         };
