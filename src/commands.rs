@@ -6,8 +6,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::FitArgs;
 use crate::progress_bar::with_progress;
+use crate::{FitArgs, ModelArgs};
 use mrsysid::io;
 use mrsysid::report::plots::{
     self, AxisSeries, EffectResidual, FoldR2, NormalProbability, ResidualDensity,
@@ -15,8 +15,8 @@ use mrsysid::report::plots::{
 use mrsysid::report::summary::AxisRow;
 use mrsysid::report::tables;
 use mrsysid::{
-    Axis, FitOutcome, IdentifiedModel, Mapping, ResidualDiagnostics, Validation, Vehicle,
-    same_file, write_atomically,
+    Axis, FitOutcome, IdentifiedModel, Mapping, Report, ResidualDiagnostics, Results, Validation,
+    Vehicle, same_file, write_atomically,
 };
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -151,18 +151,7 @@ pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
     if cmd.from_stats {
         return crate::stats_commands::fit_from_stats(cmd, diagnosis_only);
     }
-    let outputs = fit_outputs(cmd);
-    let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
-    let mut inputs: Vec<(&str, &Path)> = vec![("vehicle file", cmd.model.vehicle.as_path())];
-    inputs.extend(
-        cmd.model
-            .mapping
-            .iter()
-            .map(|p| ("mapping file", p.as_path())),
-    );
-    inputs.extend(cmd.logs.iter().map(|p| ("fit log", p.as_path())));
-    inputs.extend(cmd.validate.iter().map(|p| ("validation log", p.as_path())));
-    check_outputs(&outputs, &inputs)?;
+    check_fit_outputs(cmd, ("fit log", "validation log"))?;
     let vehicle = Vehicle::from_toml_file(&cmd.model.vehicle)?;
     if !cmd.quiet {
         for note in vehicle.notes() {
@@ -189,20 +178,54 @@ pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
             (_, false) => tables::render(&report),
         })?;
     }
-    if let Some(path) = &cmd.json {
-        let text =
-            serde_json::to_string_pretty(&report).map_err(|e| Failure::fit(e.to_string()))?;
-        write_atomically(path, text.as_bytes())
-            .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
-    }
-    if let Some(path) = &cmd.model_out {
-        results.to_identified_model().save(path)?;
-    }
+    write_report_and_model(cmd, &results, &report)?;
     if let Some(dir) = &cmd.plots {
         write_plots(dir, results.outcome()).map_err(|e| Failure::input(e.to_string()))?;
     }
     if !cmd.quiet {
         print_err(&finished.line("fit", cmd.logs.len() + cmd.validate.len()));
+    }
+    Ok(())
+}
+
+/// The vehicle and mapping files of `model` and the files `more` names, as inputs no
+/// output may overwrite.
+pub fn model_inputs<'a>(
+    model: &'a ModelArgs,
+    more: impl IntoIterator<Item = (&'static str, &'a Path)>,
+) -> Vec<(&'static str, &'a Path)> {
+    let mut inputs = vec![("vehicle file", model.vehicle.as_path())];
+    inputs.extend(model.mapping.iter().map(|p| ("mapping file", p.as_path())));
+    inputs.extend(more);
+    inputs
+}
+
+/// Refuses a fit whose output would overwrite one of its inputs: the vehicle and mapping
+/// files, the logs and the validation logs (called `kinds` in the message).
+pub fn check_fit_outputs(
+    cmd: &FitArgs,
+    kinds: (&'static str, &'static str),
+) -> Result<(), Failure> {
+    let outputs = fit_outputs(cmd);
+    let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
+    let logs = cmd.logs.iter().map(|p| (kinds.0, p.as_path()));
+    let validate = cmd.validate.iter().map(|p| (kinds.1, p.as_path()));
+    check_outputs(&outputs, &model_inputs(&cmd.model, logs.chain(validate)))
+}
+
+/// Writes the JSON report (`--json`) and the identified model (`--model-out`) of a fit.
+pub fn write_report_and_model(
+    cmd: &FitArgs,
+    results: &Results,
+    report: &Report,
+) -> Result<(), Failure> {
+    if let Some(path) = &cmd.json {
+        let text = serde_json::to_string_pretty(report).map_err(|e| Failure::fit(e.to_string()))?;
+        write_atomically(path, text.as_bytes())
+            .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
+    }
+    if let Some(path) = &cmd.model_out {
+        results.to_identified_model().save(path)?;
     }
     Ok(())
 }

@@ -1,25 +1,24 @@
 //! The commands of statistics as data: `mrsysid accumulate` (logs' first passes into a
 //! statistics file) and `mrsysid fit --from-stats` (the fit from such files).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use crate::commands::{Failure, check_outputs, fit_outputs, load_mapping, print_err, print_out};
+use crate::commands::{
+    Failure, check_fit_outputs, check_outputs, load_mapping, model_inputs, print_err, print_out,
+    write_report_and_model,
+};
 use crate::progress_bar::with_progress;
 use crate::{AccumulateArgs, FitArgs, LowPassArg};
 use mrsysid::report::tables;
-use mrsysid::{StatsPart, Vehicle, write_atomically};
+use mrsysid::{StatsPart, Vehicle};
 
 /// `mrsysid accumulate`: the logs' first passes into one statistics file.
 pub fn accumulate(cmd: &AccumulateArgs) -> Result<(), Failure> {
-    let mut inputs: Vec<(&str, &Path)> = vec![("vehicle file", cmd.model.vehicle.as_path())];
-    inputs.extend(
-        cmd.model
-            .mapping
-            .iter()
-            .map(|p| ("mapping file", p.as_path())),
-    );
-    inputs.extend(cmd.logs.iter().map(|p| ("log", p.as_path())));
-    check_outputs(&[("--out", cmd.out.as_path())], &inputs)?;
+    let logs = cmd.logs.iter().map(|p| ("log", p.as_path()));
+    check_outputs(
+        &[("--out", cmd.out.as_path())],
+        &model_inputs(&cmd.model, logs),
+    )?;
     let vehicle = Vehicle::from_toml_file(&cmd.model.vehicle)?;
     let job = cmd.identification(vehicle, load_mapping(cmd.model.mapping.as_deref())?);
     let (part, finished) = with_progress(job, cmd.quiet, |job| job.accumulate());
@@ -51,22 +50,7 @@ pub fn fit_from_stats(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure
             "{what} needs the samples: not available with --from-stats"
         )));
     }
-    let outputs = fit_outputs(cmd);
-    let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
-    let mut inputs: Vec<(&str, &Path)> = vec![("vehicle file", cmd.model.vehicle.as_path())];
-    inputs.extend(
-        cmd.model
-            .mapping
-            .iter()
-            .map(|p| ("mapping file", p.as_path())),
-    );
-    inputs.extend(cmd.logs.iter().map(|p| ("statistics file", p.as_path())));
-    inputs.extend(
-        cmd.validate
-            .iter()
-            .map(|p| ("statistics file", p.as_path())),
-    );
-    check_outputs(&outputs, &inputs)?;
+    check_fit_outputs(cmd, ("statistics file", "statistics file"))?;
     let load = |paths: &[PathBuf]| -> Result<Option<StatsPart>, Failure> {
         let mut merged: Option<StatsPart> = None;
         for path in paths {
@@ -90,15 +74,7 @@ pub fn fit_from_stats(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure
     if !cmd.quiet {
         print_out(&tables::render(&report))?;
     }
-    if let Some(path) = &cmd.json {
-        let text =
-            serde_json::to_string_pretty(&report).map_err(|e| Failure::fit(e.to_string()))?;
-        write_atomically(path, text.as_bytes())
-            .map_err(|e| Failure::input(format!("{}: cannot write: {e}", path.display())))?;
-    }
-    if let Some(path) = &cmd.model_out {
-        results.to_identified_model().save(path)?;
-    }
+    write_report_and_model(cmd, &results, &report)?;
     if !cmd.quiet {
         let logs = fit.log_names().len() + validate.as_ref().map_or(0, |v| v.log_names().len());
         print_err(&format!(
