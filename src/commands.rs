@@ -146,11 +146,9 @@ pub fn fit_outputs(cmd: &FitArgs) -> Vec<(&'static str, PathBuf)> {
     out
 }
 
-/// `mrsysid fit` (and `diagnose`, which prints only the diagnosis).
+/// `mrsysid fit` (and `diagnose`, which prints only the diagnosis) on logs; with
+/// `--from-stats`, `stats_commands::fit_from_stats` runs instead.
 pub fn fit(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure> {
-    if cmd.from_stats {
-        return crate::stats_commands::fit_from_stats(cmd, diagnosis_only);
-    }
     check_fit_outputs(cmd, ("fit log", "validation log"))?;
     let vehicle = Vehicle::from_toml_file(&cmd.model.vehicle)?;
     if !cmd.quiet {

@@ -333,6 +333,8 @@ impl SimulateArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Fit(args) if args.from_stats => stats_commands::fit_from_stats(&args, false),
+        Command::Diagnose(args) if args.from_stats => stats_commands::fit_from_stats(&args, true),
         Command::Fit(args) => commands::fit(&args, false),
         Command::Diagnose(args) => commands::fit(&args, true),
         Command::Accumulate(args) => stats_commands::accumulate(&args),
