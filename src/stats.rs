@@ -172,6 +172,25 @@ impl Accumulator {
         }
     }
 
+    /// True when the accumulator has the layout [`Accumulator::new`] gives `structure`
+    /// (columns, shapes, labels and buffer sizes) and a sorted set of distinct rows
+    /// within its cap: what merging and fitting index by. An accumulator read from a
+    /// file is checked with it before use.
+    pub fn fits_layout_of(&self, structure: &ModelStructure) -> bool {
+        let empty = Self::new(structure);
+        let q = empty.representative.len();
+        self.p == empty.p
+            && self.shape == empty.shape
+            && self.representative == empty.representative
+            && self.stored == empty.stored
+            && self.labels == empty.labels
+            && self.r.len() == q * q
+            && self.min.len() == q
+            && self.max.len() == q
+            && self.distinct.len() <= DISTINCT_ROWS_CAP
+            && self.distinct.windows(2).all(|w| w[0] < w[1])
+    }
+
     /// Assembles `chunk` with `structure` (using `ws` as scratch) and folds it in.
     /// Afterwards `ws` holds the outputs and the columns this accumulator stores (one
     /// per shape); a column that is a multiple of an earlier one is not assembled.

@@ -317,4 +317,57 @@ fn a_fit_from_saved_and_merged_statistics_equals_the_direct_fit() {
         matches!(e, Error::Stats(StatsError::DuplicateLog { .. })),
         "{e}"
     );
+
+    // A forged part: the settings (fingerprint and text) of `fit`, the statistics of a
+    // model without the terms linear in V_h (fewer columns), checksum recomputed. It
+    // must be refused by name, not index out of bounds.
+    let narrow = Identification::new(vehicle.clone())
+        .model_options(mrsysid::ModelOptions {
+            linear_vh_terms: false,
+            ..Default::default()
+        })
+        .log(logs[3].clone())
+        .accumulate()
+        .expect("narrow");
+    let forged = forge(&fit.to_bytes(), &narrow.to_bytes());
+    let forged = StatsPart::from_bytes(&forged, "forged.stats").expect("checksum matches");
+    let mut two = fit.clone();
+    two.merge(&forged).expect("same settings");
+    let e = builder()
+        .run_from_stats(&two, None)
+        .expect_err("forged layout");
+    assert!(e.to_string().contains("not laid out"), "{e}");
+}
+
+/// The statistics file `logs_from` with the settings of `settings_from` (both in the
+/// format of docs/stats-format.md): the payload starts with the fingerprint (varint)
+/// and the settings text (varint length, bytes), then the logs.
+fn forge(settings_from: &[u8], logs_from: &[u8]) -> Vec<u8> {
+    const HEADER: usize = 32;
+    let varint_end = |b: &[u8], mut at: usize| {
+        while b[at] & 0x80 != 0 {
+            at += 1;
+        }
+        at + 1
+    };
+    let settings_end = |b: &[u8]| {
+        let at = varint_end(b, HEADER);
+        let (mut len, mut shift, mut i) = (0usize, 0, at);
+        loop {
+            len |= usize::from(b[i] & 0x7f) << shift;
+            shift += 7;
+            i += 1;
+            if b[i - 1] & 0x80 == 0 {
+                break;
+            }
+        }
+        i + len
+    };
+    let mut payload = settings_from[HEADER..settings_end(settings_from)].to_vec();
+    payload.extend_from_slice(&logs_from[settings_end(logs_from)..]);
+    let mut out = settings_from[..20].to_vec();
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+    out.extend_from_slice(&payload);
+    out
 }

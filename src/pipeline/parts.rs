@@ -138,6 +138,9 @@ pub fn run_from_parts(
             .into());
         }
     }
+    for part in std::iter::once(fit).chain(validate) {
+        part.check_layout(&req.structure)?;
+    }
     if fit.logs.len() < 2 {
         return Err(StatsError::TooFewLogs {
             logs: fit.logs.len(),
@@ -188,6 +191,24 @@ impl StatsPart {
     /// The names of its logs, in order.
     pub fn log_names(&self) -> Vec<String> {
         self.logs.iter().map(|l| l.summary.file.clone()).collect()
+    }
+
+    /// Refuses a part whose statistics are not laid out as `structure`'s (a file made
+    /// with the same settings but altered, whose checksum was made to match).
+    fn check_layout(&self, structure: &crate::model::ModelStructure) -> Result<(), StatsError> {
+        match self
+            .logs
+            .iter()
+            .find(|l| !l.stats.fits_layout_of(structure))
+        {
+            Some(log) => Err(StatsError::Format {
+                file: log.summary.file.clone(),
+                what: "statistics not laid out for the requested model (columns, shapes or \
+                       buffer sizes differ): the part was altered"
+                    .into(),
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Samples of all its logs.
