@@ -176,6 +176,19 @@ pub enum RequestError {
         /// Guard given, s.
         guard_seconds: f64,
     },
+    /// Cross-validation groups that do not name each fit log, or name fewer than two
+    /// groups.
+    #[error(
+        "cross-validation groups must name each of the {logs} fit logs, in order, with at least 2 distinct groups (got {groups} names, {distinct} distinct)"
+    )]
+    InvalidGroups {
+        /// Group names given.
+        groups: usize,
+        /// Distinct names among them.
+        distinct: usize,
+        /// Fit logs.
+        logs: usize,
+    },
     /// A loads low-pass cut-off that is not a positive number of Hz.
     #[error("the loads' low-pass cut-off must be a positive number of Hz (got {hz})")]
     InvalidLoadsLowPass {

@@ -99,6 +99,7 @@ impl Identification {
                 fit: FitOptions::default(),
                 holdout: Holdout::default(),
                 validate: Vec::new(),
+                groups: Vec::new(),
                 threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
                 second_pass: true,
                 diagnose: Some(DiagnoseOptions::default()),
@@ -109,6 +110,15 @@ impl Identification {
             bad_samples: None,
             estimate_low_pass: false,
         }
+    }
+
+    /// Cross-validation groups, one name per fit log in the order the logs are added:
+    /// the logs of a group are left out together (e.g. one group per flight day).
+    /// Without it each log is its own fold. Checked when the fit runs
+    /// ([`crate::RequestError::InvalidGroups`]).
+    pub fn groups<S: Into<String>>(mut self, groups: impl IntoIterator<Item = S>) -> Self {
+        self.request.groups = groups.into_iter().map(Into::into).collect();
+        self
     }
 
     /// The Eq. 22 variant to fit (inflow correction, linear V_h terms, J_z terms).

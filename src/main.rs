@@ -109,6 +109,12 @@ struct FitArgs {
     /// effects) sees them (help text: [`validate_help`]).
     #[arg(long, num_args = 1.., help = validate_help())]
     validate: Vec<PathBuf>,
+    /// Cross-validation groups, one name per fit log in the order given (with
+    /// --from-stats, per log inside the statistics files, in order), comma-separated: the
+    /// logs of a group are left out together, e.g. `--groups day1,day1,day2` for one group
+    /// per flight day. Without it each log is left out on its own.
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    groups: Vec<String>,
     /// Contiguous blocks a single fit log is cut into to cross-validate it (at least 2):
     /// each is predicted by the model fitted on the others.
     #[arg(long, default_value_t = Holdout::DEFAULT.blocks)]
@@ -443,6 +449,9 @@ impl FitArgs {
                 guard_seconds: self.holdout_guard,
             })
             .diagnose(!self.no_diagnose);
+        if !self.groups.is_empty() {
+            job = job.groups(self.groups.iter().cloned());
+        }
         for log in &self.validate {
             job = job.validate(log.clone());
         }

@@ -1100,3 +1100,78 @@ fn a_fit_from_statistics_files_reports_what_the_direct_fit_reports() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("--plots needs the samples"), "{stderr}");
 }
+
+#[test]
+fn fit_with_named_groups_cross_validates_and_diagnoses_group_by_group() {
+    // Four quarters of the shipped 30 s flight, the first two one "day", the last two
+    // another: the folds are the two groups, the diagnosis judges every candidate on
+    // them (the drag is still found: it acts in every quarter), and the table says how
+    // the folds were made.
+    let text = std::fs::read_to_string(root().join("data/quad_x_flight_quadratic_drag.csv"))
+        .expect("shipped flight");
+    let mut lines = text.lines();
+    let header = lines.next().expect("header");
+    let rows: Vec<&str> = lines.collect();
+    let logs: Vec<PathBuf> = rows
+        .chunks(rows.len().div_ceil(4))
+        .enumerate()
+        .map(|(i, chunk)| {
+            let path = tmp(&format!("groups_q{i}.csv"));
+            std::fs::write(&path, format!("{header}\n{}\n", chunk.join("\n"))).expect("write");
+            path
+        })
+        .collect();
+    let report = tmp("groups.json");
+    let mut args: Vec<&str> = logs.iter().map(|p| p.to_str().unwrap()).collect();
+    args.splice(0..0, ["fit"]);
+    args.extend([
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--groups",
+        "day1,day1,day2,day2",
+        "--json",
+        report.to_str().unwrap(),
+    ]);
+    let out = mrsysid(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("each group of logs predicted by the model fitted on the other groups"),
+        "{stdout}"
+    );
+    let v = json(&report);
+    let names: Vec<&str> = v["cross_validation"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["group day1", "group day2", "pooled"]);
+    let added: Vec<&str> = v["diagnosis"]["effects_added"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["name"].as_str().unwrap())
+        .collect();
+    assert!(
+        added
+            .iter()
+            .any(|n| n.starts_with("quadratic airframe drag")),
+        "{added:?}"
+    );
+    // One name per log, at least two groups.
+    args.iter_mut()
+        .filter(|a| a.starts_with("day1"))
+        .for_each(|a| *a = "day1,day1,day1,day1");
+    let out = mrsysid(&args);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("at least 2 distinct groups"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -45,6 +45,7 @@ fn request(logs: &[&Path], validate: &[&Path], threads: usize) -> FitRequest {
         fit: FitOptions::default(),
         holdout: Holdout::default(),
         validate: validate.iter().map(|&p| p.into()).collect(),
+        groups: Vec::new(),
         threads,
         second_pass: true,
         diagnose: Some(DiagnoseOptions::default()),
@@ -370,4 +371,85 @@ fn forge(settings_from: &[u8], logs_from: &[u8]) -> Vec<u8> {
     out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
     out.extend_from_slice(&payload);
     out
+}
+
+/// Cross-validation groups: with logs a1, a2 in group `a` and b1, b2 in group `b`, the
+/// folds are the two groups, and fold `group b` is the model fitted on a1 and a2
+/// predicting b1 and b2, which a fit of a1 and a2 with b1 and b2 as validation logs
+/// computes on its own (to 1e-9 relative: the two merge the same statistics in other
+/// orders). Groups naming each log alone give the leave-one-log-out report, and bad
+/// groups are refused before any log is read.
+#[test]
+fn cross_validation_groups_leave_their_logs_out_together() {
+    use mrsysid::{Error, Identification, RequestError};
+    let logs: Vec<PathBuf> = [(0, 750), (750, 1500), (1500, 2250), (2250, 3001)]
+        .iter()
+        .map(|&(a, b)| flight_part(&format!("groups-{a}.csv"), a..b))
+        .collect();
+    let vehicle =
+        Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle");
+    let builder = || {
+        Identification::new(vehicle.clone())
+            .threads(2)
+            .residual_pass(false)
+            .diagnose(false)
+    };
+    let grouped = builder()
+        .logs(logs.clone())
+        .groups(["a", "a", "b", "b"])
+        .run()
+        .expect("grouped")
+        .report();
+    let names: Vec<&str> = grouped
+        .cross_validation
+        .iter()
+        .map(|f| f.name.as_str())
+        .collect();
+    assert_eq!(names, ["group a", "group b", "pooled"]);
+    let direct = builder()
+        .logs(logs[..2].to_vec())
+        .validate(logs[2].clone())
+        .validate(logs[3].clone())
+        .run()
+        .expect("a predicting b")
+        .report();
+    for (fold, valid) in grouped.cross_validation[1]
+        .axes
+        .iter()
+        .zip(&direct.validation)
+    {
+        for (x, y) in [(fold.r2, valid.r2), (fold.rmse, valid.rmse)] {
+            assert!(
+                (x - y).abs() <= 1e-9 * y.abs().max(1e-12),
+                "{fold:?} vs {valid:?}"
+            );
+        }
+    }
+    // Each log its own group: the leave-one-log-out folds, renamed.
+    let names: Vec<String> = (1..=4).map(|i| format!("log{i}")).collect();
+    let alone = builder()
+        .logs(logs.clone())
+        .groups(names)
+        .run()
+        .expect("alone");
+    let plain = builder().logs(logs.clone()).run().expect("plain").report();
+    for (g, p) in alone
+        .report()
+        .cross_validation
+        .iter()
+        .zip(&plain.cross_validation)
+    {
+        assert_eq!(g.axes, p.axes);
+    }
+    for groups in [vec!["a", "a", "a", "a"], vec!["a", "b"]] {
+        let e = builder()
+            .logs(logs.clone())
+            .groups(groups)
+            .run()
+            .expect_err("bad groups");
+        assert!(
+            matches!(e, Error::Request(RequestError::InvalidGroups { .. })),
+            "{e}"
+        );
+    }
 }

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Iterable, List, Optional, Union
+from typing import Any, Iterable, List, Optional, Sequence, Union
 
 from . import _mrsysid
 from ._results import Results
@@ -30,6 +30,7 @@ def fit(
     loads_low_pass: Union[float, str, None] = None,
     keep_ground: bool = False,
     residual_pass: bool = True,
+    groups: Optional[Sequence[str]] = None,
 ) -> Results:
     """Identifies the vehicle's model from logs: FSOA term ordering, the multivariate
     regression of all parameters, cross-validation and, with ``diagnose``, the
@@ -71,6 +72,9 @@ def fit(
             files are fitted (rotor thrust below the weight for 1 s or more is ground).
         residual_pass: run the second pass (residual diagnostics and the
             coloured-residual correction of σ); the diagnosis runs it regardless.
+        groups: cross-validation groups, one name per fit log (the files of ``logs``,
+            then the tables of ``samples``, in order): the logs of a group are left out
+            together, e.g. one group per flight day. Default: each log alone.
 
     The GIL is released while the fit runs; Ctrl-C stops it within a chunk of data and
     raises ``KeyboardInterrupt``. Errors raise the exceptions of ``mrsysid.errors``.
@@ -111,5 +115,6 @@ def fit(
         estimate_loads_low_pass=estimate,
         keep_ground=keep_ground,
         residual_pass=residual_pass,
+        groups=list(groups or ()),
     )
     return Results(native)

@@ -85,6 +85,7 @@ def fit(
     estimate_loads_low_pass: bool,
     keep_ground: bool,
     residual_pass: bool,
+    groups: List[str],
 ) -> Results:
     """Runs the fit with the GIL released; Ctrl-C raises ``KeyboardInterrupt``."""
 
@@ -120,5 +121,6 @@ def fit_from_stats(
     drop_invalid: bool,
     loads_low_pass: Optional[float],
     keep_ground: bool,
+    groups: List[str],
 ) -> Results:
     """The Eq. 22 fit from statistics parts (no residual pass, no diagnosis)."""

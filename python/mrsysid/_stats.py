@@ -83,8 +83,10 @@ def fit_from_stats(
     drop_invalid: bool = False,
     loads_low_pass: Optional[float] = None,
     keep_ground: bool = False,
+    groups: Optional[Sequence[str]] = None,
 ) -> Results:
-    """The Eq. 22 fit of the logs in ``parts`` (at least two: leave one log out) with
+    """The Eq. 22 fit of the logs in ``parts`` (at least two: leave one log out, or
+    leave one group out with ``groups``, one name per log of ``parts`` in order) with
     validation figures on those in ``validate``, from their statistics alone: equal to
     ``mrsysid.fit`` of the same logs with ``residual_pass=False`` and
     ``diagnose=False`` (the residual pass and the diagnosis need the samples). The
@@ -108,5 +110,6 @@ def fit_from_stats(
             loads_low_pass=loads_low_pass,
             keep_ground=keep_ground,
         ),
+        groups=list(groups or ()),
     )
     return Results(native)

@@ -57,6 +57,7 @@ def fit_fleet(
     drop_invalid: bool = False,
     loads_low_pass: Optional[float] = None,
     keep_ground: bool = False,
+    groups: Optional[Sequence[str]] = None,
 ) -> FleetResults:
     """Fits one model to a fleet of logs on a Dask cluster: one task per log (and per
     validation log) reads it into its statistics part, and the client merges the parts
@@ -65,7 +66,9 @@ def fit_fleet(
     ``distributed.Client`` (default: the current one). A log whose reading fails is
     reported in ``FleetResults.failed`` and left out; a worker that dies is retried by
     Dask (each task is pure). The result equals ``mrsysid.fit_from_stats`` of the logs
-    read in one process, in the order given."""
+    read in one process, in the order given. ``groups``: one cross-validation group
+    name per log of ``paths`` (e.g. its flight day); the logs of a group are left out
+    together, and a log left out as unreadable leaves its group."""
     from distributed import get_client
 
     client = client if client is not None else get_client()
@@ -97,11 +100,13 @@ def fit_fleet(
     if fit_part is None:
         raise ValueError(f"no log of the fleet could be read: {failed}")
     options.pop("mapping")
+    group_of = dict(zip([os.fspath(p) for p in paths], groups or ()))
     results = fit_from_stats(
         _mrsysid.Vehicle.from_toml(vehicle_toml),
         fit_part,
         validate=validate_part if validate_part is not None else (),
         mapping=mapping,
+        groups=[group_of[p] for p in fitted] if groups else None,
         **options,
     )
     return FleetResults(results=results, fitted=fitted, failed=failed)

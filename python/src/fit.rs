@@ -73,7 +73,7 @@ impl Options<'_> {
 #[pyo3(signature = (
     vehicle, *, logs, tables, validate_logs, validate_tables, mapping, diagnose, threads,
     inflow, linear_vh, rotor_inertia, drop_invalid, holdout_blocks, holdout_guard, loads_low_pass, estimate_loads_low_pass, keep_ground,
-    residual_pass
+    residual_pass, groups
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
@@ -96,6 +96,7 @@ pub fn fit<'py>(
     estimate_loads_low_pass: bool,
     keep_ground: bool,
     residual_pass: bool,
+    groups: Vec<String>,
 ) -> PyResult<Results> {
     let options = Options {
         mapping,
@@ -116,6 +117,7 @@ pub fn fit<'py>(
         })
         .diagnose(diagnose)
         .residual_pass(residual_pass)
+        .groups(groups)
         .logs(logs);
     if estimate_loads_low_pass {
         job = job.estimate_loads_low_pass();

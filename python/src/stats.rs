@@ -89,7 +89,7 @@ pub fn merge_stats<'py>(py: Python<'py>, parts: Vec<Vec<u8>>) -> PyResult<Bound<
 #[pyfunction]
 #[pyo3(signature = (
     vehicle, *, parts, validate_parts, mapping, threads, inflow, linear_vh, rotor_inertia,
-    drop_invalid, loads_low_pass, keep_ground
+    drop_invalid, loads_low_pass, keep_ground, groups
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit_from_stats<'py>(
@@ -105,6 +105,7 @@ pub fn fit_from_stats<'py>(
     drop_invalid: bool,
     loads_low_pass: Option<f64>,
     keep_ground: bool,
+    groups: Vec<String>,
 ) -> PyResult<Results> {
     let options = Options {
         mapping,
@@ -116,7 +117,7 @@ pub fn fit_from_stats<'py>(
         loads_low_pass,
         keep_ground,
     };
-    let job = options.builder(py, &vehicle)?;
+    let job = options.builder(py, &vehicle)?.groups(groups);
     let fit = part(py, &parts, "parts")?;
     let validate = validate_parts
         .map(|b| part(py, &b, "validate_parts"))

@@ -56,12 +56,28 @@ def test_a_fleet_on_two_dask_workers_equals_the_single_process_fit(tmp_path: Pat
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as client:
-        fleet = fit_fleet([*logs[:40], corrupt], QUAD_X, validate=logs[40:], client=client)
+        # Four "days" of ten logs each as cross-validation groups; the corrupt log's
+        # group goes with it.
+        days = [f"day{k // 10}" for k in range(40)]
+        fleet = fit_fleet(
+            [*logs[:40], corrupt],
+            QUAD_X,
+            validate=logs[40:],
+            client=client,
+            groups=[*days, "day9"],
+        )
     assert fleet.fitted == [str(p) for p in logs[:40]]
     assert list(fleet.failed) == [str(corrupt)]
     assert "corrupt.csv" in fleet.failed[str(corrupt)]
     direct = mrsysid.fit(
-        quad_x, logs[:40], validate=logs[40:], residual_pass=False, diagnose=False
+        quad_x,
+        logs[:40],
+        validate=logs[40:],
+        residual_pass=False,
+        diagnose=False,
+        groups=days,
     )
+    folds = [f["name"] for f in fleet.results.report()["cross_validation"]]
+    assert folds == ["group day0", "group day1", "group day2", "group day3", "pooled"]
     pd.testing.assert_frame_equal(fleet.results.parameters, direct.parameters, rtol=0, atol=0)
     pd.testing.assert_frame_equal(fleet.results.metrics, direct.metrics, rtol=0, atol=0)

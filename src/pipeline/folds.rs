@@ -4,6 +4,7 @@
 
 use super::FitRequest;
 use super::blocks::BlockPlan;
+use super::request::group_order;
 use crate::diagnose::local::{LocalFolds, LocalRegions};
 use crate::error::Error;
 use crate::estimate::Folds;
@@ -42,7 +43,14 @@ pub(super) fn arrange(
         .zip(&req.logs)
         .map(|(pieces, source)| (source.name(), pieces[0].clone()))
         .collect::<Vec<_>>();
-    let folds = Folds::leave_one_out(&logs).map_err(|source| Error::Accumulate {
+    let left_out = match grouped(&req.groups, &logs, |a, b| merge(&mut a.1, &b.1))? {
+        Some(groups) => groups
+            .into_iter()
+            .map(|(name, (_, stats))| (name, stats))
+            .collect(),
+        None => logs.clone(),
+    };
+    let folds = Folds::leave_one_out(&left_out).map_err(|source| Error::Accumulate {
         log: "leave-one-out folds".into(),
         source,
     })?;
@@ -51,6 +59,33 @@ pub(super) fn arrange(
         merge(&mut fit, a)?;
     }
     Ok((folds, fit))
+}
+
+/// The fit logs' `per_log` items (in fit-log order) merged per cross-validation group of
+/// `groups` (one name per log), the groups in order of first appearance and each
+/// group's logs merged in log order, named `group <name>`; `None` without groups (each
+/// log is its own fold).
+pub(super) fn grouped<T: Clone>(
+    groups: &[String],
+    per_log: &[T],
+    mut merge: impl FnMut(&mut T, &T) -> Result<(), Error>,
+) -> Result<Option<Vec<(String, T)>>, Error> {
+    if groups.is_empty() {
+        return Ok(None);
+    }
+    let mut out = Vec::new();
+    for name in group_order(groups) {
+        let mut members = groups.iter().zip(per_log).filter(|(g, _)| *g == name);
+        let Some((_, first)) = members.next() else {
+            continue;
+        };
+        let mut merged = first.clone();
+        for (_, item) in members {
+            merge(&mut merged, item)?;
+        }
+        out.push((format!("group {name}"), merged));
+    }
+    Ok(Some(out))
 }
 
 /// The held-out statistics where each local candidate acts, per fold as [`arrange`]

@@ -94,6 +94,7 @@ pub fn accumulate(req: &FitRequest) -> Result<StatsPart, Error> {
     req.validate.clear();
     req.second_pass = false;
     req.diagnose = None;
+    super::request::check_groups(&req)?;
     check(&req)?;
     let jobs: Vec<(LogSource, Role)> = req.logs.iter().map(|l| (l.clone(), Role::Fit)).collect();
     req.enter(Phase::Reading, first_pass_size(&jobs));

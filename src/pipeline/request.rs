@@ -68,6 +68,11 @@ pub struct FitRequest {
     pub holdout: Holdout,
     /// Reporting-only validation logs: evaluated, never used for a decision.
     pub validate: Vec<LogSource>,
+    /// Cross-validation groups of the fit logs, one name per log in `logs` order: the
+    /// logs of one group are left out together (e.g. one group per flight day, so a day's
+    /// wind and battery do not leak into its own prediction). Empty: each log is its own
+    /// group (leave one log out).
+    pub groups: Vec<String>,
     /// Threads for reading, accumulating and the diagnosis (≥ 1).
     pub threads: usize,
     /// Run the second pass (residual diagnostics, plot series).
@@ -138,5 +143,33 @@ pub(super) fn check(req: &FitRequest) -> Result<(), RequestError> {
     if structure != vehicle {
         return Err(RequestError::StructureMismatch { structure, vehicle });
     }
+    check_groups(req)?;
     crate::inputs::check_logs(&req.logs, &req.validate)
+}
+
+/// Groups, when given, name every fit log and at least two distinct groups.
+pub(super) fn check_groups(req: &FitRequest) -> Result<(), RequestError> {
+    if req.groups.is_empty() {
+        return Ok(());
+    }
+    let distinct = group_order(&req.groups).len();
+    if req.groups.len() != req.logs.len() || distinct < 2 {
+        return Err(RequestError::InvalidGroups {
+            groups: req.groups.len(),
+            distinct,
+            logs: req.logs.len(),
+        });
+    }
+    Ok(())
+}
+
+/// The distinct group names of `groups`, in order of first appearance.
+pub(super) fn group_order(groups: &[String]) -> Vec<&str> {
+    let mut order: Vec<&str> = Vec::new();
+    for g in groups {
+        if !order.contains(&g.as_str()) {
+            order.push(g);
+        }
+    }
+    order
 }

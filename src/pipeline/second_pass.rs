@@ -5,7 +5,7 @@
 //! pass.
 
 use super::first_pass::LogCounts;
-use super::folds::{arrange, local_folds, merge};
+use super::folds::{arrange, grouped, local_folds, merge};
 use super::pass_share::{Extended, LogPass, PassContext, Start};
 use super::remainder::remainder;
 use super::request::check_cancel;
@@ -187,6 +187,12 @@ pub(super) fn second_pass(
     for pieces in &per_log[n_fit..] {
         merge(&mut report, &pieces[0])?;
     }
+    let local_parts = match grouped(&req.groups, &local_parts, |a, b| {
+        a.iter_mut().zip(b).try_for_each(|(a, b)| merge(a, b))
+    })? {
+        Some(groups) => groups.into_iter().map(|(_, regions)| regions).collect(),
+        None => local_parts,
+    };
     let local = local_folds(&ext.regions, &local_parts, &folds);
     options.variance_inflation = options.variance_inflation.max(inflation);
     let stats = CandidateStatistics {

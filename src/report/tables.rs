@@ -348,9 +348,13 @@ fn fit_table(out: &mut String, r: &Report) {
         );
     }
     if r.cross_validation.len() > 2 {
-        // A single log's folds are its blocks (`block k/K (a-b s)`), several logs' the logs.
-        let held_out = if r.cross_validation[0].name.starts_with("block ") {
+        // A single log's folds are its blocks (`block k/K (a-b s)`), several logs' the logs
+        // or the groups the user named (`group <name>`).
+        let first = &r.cross_validation[0].name;
+        let held_out = if first.starts_with("block ") {
             "each block predicted by the model fitted on the rest of the log less its guards"
+        } else if first.starts_with("group ") {
+            "each group of logs predicted by the model fitted on the other groups"
         } else {
             "each log predicted by the model fitted on the others"
         };
