@@ -184,6 +184,11 @@ pub struct DiagnosisReport {
     /// than the Eq. 22 model (`Diagnosis::worse_than_base`); absent when there are none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub worse_than_base: Vec<Axis>,
+    /// Axes on which the final model predicts the reporting-only validation logs worse
+    /// than the Eq. 22 model (`Diagnosis::worse_on_validation`); absent when there are
+    /// none or no validation log was given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub worse_on_validation: Vec<Axis>,
 }
 
 /// An effect (candidate) with its estimates.
@@ -346,6 +351,7 @@ impl From<&Diagnosis> for DiagnosisReport {
             stopped_at_limit: d.stopped_at_limit,
             remainder: d.remainder.clone(),
             worse_than_base: d.worse_than_base(),
+            worse_on_validation: d.worse_on_validation(),
         }
     }
 }

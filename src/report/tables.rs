@@ -168,6 +168,24 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
             100.0 * at(&d.after)
         );
     }
+    if let Some(v) = &d.validation {
+        for axis in &d.worse_on_validation {
+            let at = |rows: &[AxisRow]| {
+                rows.iter()
+                    .find(|r| r.axis == *axis)
+                    .map_or((f64::NAN, f64::NAN), |r| (r.r2, r.rmse))
+            };
+            let ((r2b, eb), (r2a, ea)) = (at(&v.before), at(&v.after));
+            let _ = writeln!(
+                out,
+                "  worse than the Eq. 22 model on the validation logs' {}: R2 {:.1}% -> {:.1}%, \
+                 RMSE {eb:.4} -> {ea:.4} (no decision saw these data)",
+                axis.name(),
+                100.0 * r2b,
+                100.0 * r2a,
+            );
+        }
+    }
     let _ = writeln!(out, "  R2 [%] per held-out data, before -> after");
     let rows: Vec<(String, &Vec<AxisRow>)> = d
         .folds
