@@ -29,7 +29,10 @@ impl LocalRegions {
     /// geometry for the signals. At most 64 (a bit each in an activity pattern; the
     /// candidate library has five).
     pub fn new(base: &ModelStructure, candidates: &[Candidate]) -> Self {
+        // Only the activity columns are read: no known terms, so assembling them
+        // computes no outputs' known terms and none of their signals.
         let mut activity = base.select_columns(&[]);
+        activity.known = Default::default();
         let mut regions = Vec::new();
         let mut thresholds = Vec::new();
         for (c, cand) in candidates.iter().enumerate() {
@@ -85,9 +88,16 @@ impl LocalRegions {
         if self.is_empty() || chunk.is_empty() {
             return Ok(());
         }
-        self.activity
-            .assemble(chunk, active_ws)
-            .map_err(AccumulateError::from)?;
+        // The activity signals are among the candidates' (each region's candidate acts
+        // through them), so they are read from the extended assembly.
+        let reused = self
+            .activity
+            .assemble_columns_from(chunk, extended, assembled, active_ws);
+        if reused.is_none() {
+            self.activity
+                .assemble(chunk, active_ws)
+                .map_err(AccumulateError::from)?;
+        }
         let signals: Vec<&[f64]> = (0..self.len()).map(|k| active_ws.column(k)).collect();
         let patterns = activity_patterns(&signals, &self.thresholds);
         // The distinct patterns that act, ascending (a handful per chunk).
