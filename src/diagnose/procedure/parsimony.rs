@@ -5,7 +5,7 @@
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use super::outcome::Unsupported;
-use super::trial::{CandidateStatistics, Trial, held_out, trial};
+use super::trial::{CandidateStatistics, Trial, held_out, trial_with_held_out};
 use crate::diagnose::options::DiagnoseOptions;
 use crate::estimate::{CrossValidation, FitOptions};
 use crate::model::ParamId;
@@ -66,7 +66,7 @@ pub(super) fn prune(
             break;
         }
         // Each removal scored on the folds only; the one chosen is then fitted in full.
-        let mut removals: Vec<((ParamId, Axis), f64, Vec<usize>)> =
+        let mut removals: Vec<((ParamId, Axis), f64, Vec<usize>, CrossValidation)> =
             map_on_threads(&terms, threads, |&term| {
                 let without: Vec<usize> = kept
                     .iter()
@@ -75,7 +75,7 @@ pub(super) fn prune(
                     .collect();
                 let structure = stats.extended.select_columns(&without);
                 let cv = held_out(stats, &structure, &without, fit_options).ok()?;
-                Some((term, cv_score(&cv, &scale), without))
+                Some((term, cv_score(&cv, &scale), without, cv))
             })
             .into_iter()
             .flatten()
@@ -88,9 +88,11 @@ pub(super) fn prune(
                 break None;
             }
             // A removal whose fit on all data fails is no trial model: the next cheapest.
-            match trial(
+            // Its held-out errors are those just scored.
+            match trial_with_held_out(
                 stats,
                 &removals[i].2,
+                removals[i].3.clone(),
                 fit_options,
                 options.variance_inflation,
             ) {
