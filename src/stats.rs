@@ -371,6 +371,16 @@ impl Accumulator {
         self.shape[j].0
     }
 
+    /// Writes the factor column of augmented column j into `dst` (`rows()` values):
+    /// [`Accumulator::r_column`] without allocating.
+    pub(crate) fn write_r_column(&self, j: usize, dst: &mut [f64]) {
+        let (u, f) = self.shape[j];
+        let q = self.rows();
+        for (d, v) in dst.iter_mut().zip(&self.r[u * q..(u + 1) * q]) {
+            *d = f * v;
+        }
+    }
+
     /// Factor column of augmented column j (`rows()` values).
     pub fn r_column(&self, j: usize) -> Vec<f64> {
         let (u, f) = self.shape[j];
