@@ -31,6 +31,7 @@
 mod triangular_update;
 
 use std::hash::{DefaultHasher, Hasher};
+use std::sync::Arc;
 
 use faer::{Mat, MatMut};
 pub(crate) use triangular_update::{FoldScratch, fold_rows};
@@ -96,9 +97,12 @@ pub struct Accumulator {
     max: Vec<f64>,
     out_mean: [f64; 6],
     out_m2: [f64; 6],
-    labels: Vec<String>,
-    /// Sorted hashes of the distinct regressor rows seen, at most [`DISTINCT_ROWS_CAP`].
-    distinct: Vec<u64>,
+    /// Label of each augmented column (shared, not copied, by [`Accumulator::select`]'s
+    /// thousands of trial statistics).
+    labels: Vec<Arc<str>>,
+    /// Sorted hashes of the distinct regressor rows seen, at most [`DISTINCT_ROWS_CAP`]
+    /// (shared with the statistics selected from these until either adds one).
+    distinct: Arc<Vec<u64>>,
     /// Smallest and largest measured output per axis (before the known terms).
     measured: [(f64, f64); 6],
     /// Smallest and largest u, v, w, p, q, r.
@@ -146,8 +150,12 @@ impl Accumulator {
     /// An empty accumulator sized for `structure` (all its columns and six outputs).
     pub fn new(structure: &ModelStructure) -> Self {
         let p = structure.columns.len();
-        let mut labels: Vec<String> = structure.columns.iter().map(column_field).collect();
-        labels.extend(Axis::ALL.iter().map(|a| format!("output {a}")));
+        let mut labels: Vec<Arc<str>> = structure
+            .columns
+            .iter()
+            .map(|c| column_field(c).into())
+            .collect();
+        labels.extend(Axis::ALL.iter().map(|a| format!("output {a}").into()));
         let (mut shape, mut representative) = column_shapes(&structure.columns);
         for a in 0..6 {
             representative.push(p + a);
@@ -166,7 +174,7 @@ impl Accumulator {
             out_mean: [0.0; 6],
             out_m2: [0.0; 6],
             labels,
-            distinct: Vec::new(),
+            distinct: Arc::default(),
             measured: [(f64::INFINITY, f64::NEG_INFINITY); 6],
             motion: [(f64::INFINITY, f64::NEG_INFINITY); 6],
         }
@@ -197,7 +205,7 @@ impl Accumulator {
             if !crate::util::all_finite(col) {
                 let i = col.iter().position(|v| !v.is_finite()).unwrap_or(0);
                 return Err(AccumulateError::NonFinite {
-                    field: self.labels[self.representative[u]].clone(),
+                    field: self.labels[self.representative[u]].to_string(),
                     sample: self.count + i as u64,
                 });
             }
@@ -267,8 +275,11 @@ impl Accumulator {
         for a in 0..6 {
             self.combine_moments(a, other.count, other.out_mean[a], other.out_m2[a]);
         }
-        for &h in &other.distinct {
-            insert_distinct(&mut self.distinct, h);
+        if self.distinct.len() < DISTINCT_ROWS_CAP {
+            let set = Arc::make_mut(&mut self.distinct);
+            for &h in other.distinct.iter() {
+                insert_distinct(set, h);
+            }
         }
         for (m, o) in self
             .measured
@@ -340,14 +351,15 @@ impl Accumulator {
             .filter(|&u| self.representative[u] < self.p)
             .map(|u| self.data_column(ws, u))
             .collect();
+        let set = Arc::make_mut(&mut self.distinct);
         for i in 0..ws.len() {
             let mut h = DefaultHasher::new();
             for c in &cols {
                 // + 0.0 maps −0 to +0.
                 h.write_u64((c[i] + 0.0).to_bits());
             }
-            insert_distinct(&mut self.distinct, h.finish());
-            if self.distinct.len() >= DISTINCT_ROWS_CAP {
+            insert_distinct(set, h.finish());
+            if set.len() >= DISTINCT_ROWS_CAP {
                 return;
             }
         }
@@ -596,8 +608,8 @@ impl Accumulator {
                 .collect(),
             out_mean: self.out_mean,
             out_m2: self.out_m2,
-            labels: keep.iter().map(|&j| self.labels[j].clone()).collect(),
-            distinct: self.distinct.clone(),
+            labels: keep.iter().map(|&j| Arc::clone(&self.labels[j])).collect(),
+            distinct: Arc::clone(&self.distinct),
             measured: self.measured,
             motion: self.motion,
         }
