@@ -200,8 +200,63 @@ impl Accumulator {
             return Ok(());
         }
         let q = self.rows();
-        for u in 0..q {
-            let col = self.data_column(ws, u);
+        let columns: Vec<&[f64]> = (0..q).map(|u| self.data_column(ws, u)).collect();
+        let measured = Axis::ALL.map(|axis| ws.measured_range(axis));
+        let motion = std::array::from_fn(|k| ws.motion_range(k));
+        self.take_in(&columns, measured, motion)?;
+        STACKED.with_borrow_mut(|s| {
+            s.a.resize_with(n, q, |_, _| 0.0);
+            for (j, col) in columns.iter().enumerate() {
+                s.a.col_as_slice_mut(j).copy_from_slice(col);
+            }
+            fold_into(&mut self.r, s);
+        });
+        self.count += n as u64;
+        Ok(())
+    }
+
+    /// Folds in the rows `rows` (ascending) of `chunk`, last assembled into `ws` by the
+    /// same structure: the same statistics as [`Accumulator::push_assembled`] of those
+    /// rows gathered ([`Workspace::gather`]), the rows copied straight into the fold.
+    pub(crate) fn push_rows(
+        &mut self,
+        ws: &Workspace,
+        chunk: &SampleChunk,
+        rows: &[usize],
+    ) -> Result<(), AccumulateError> {
+        let n = rows.len();
+        if n == 0 {
+            return Ok(());
+        }
+        let q = self.rows();
+        let (measured, motion) = crate::model::row_ranges(chunk, rows);
+        STACKED.with_borrow_mut(|s| {
+            s.a.resize_with(n, q, |_, _| 0.0);
+            for u in 0..q {
+                let src = self.data_column(ws, u);
+                for (d, &i) in s.a.col_as_slice_mut(u).iter_mut().zip(rows) {
+                    *d = src[i];
+                }
+            }
+            let columns: Vec<&[f64]> = (0..q).map(|u| s.a.col_as_slice(u)).collect();
+            self.take_in(&columns, measured, motion)?;
+            fold_into(&mut self.r, s);
+            Ok::<(), AccumulateError>(())
+        })?;
+        self.count += n as u64;
+        Ok(())
+    }
+
+    /// Checks the data of `n` new samples, `columns[u]` of shape u, and takes in all but
+    /// their factor: column ranges, output moments, distinct rows, the measured and
+    /// motion ranges. Nothing changes when a value is not finite.
+    fn take_in(
+        &mut self,
+        columns: &[&[f64]],
+        measured: [(f64, f64); 6],
+        motion: [(f64, f64); 6],
+    ) -> Result<(), AccumulateError> {
+        for (u, col) in columns.iter().enumerate() {
             if !crate::util::all_finite(col) {
                 let i = col.iter().position(|v| !v.is_finite()).unwrap_or(0);
                 return Err(AccumulateError::NonFinite {
@@ -210,42 +265,36 @@ impl Accumulator {
                 });
             }
         }
-        for j in 0..q {
-            let col = self.data_column(ws, j);
+        for (j, col) in columns.iter().enumerate() {
             let (lo, hi) = crate::util::range_of_slice(col);
             self.min[j] = self.min[j].min(lo);
             self.max[j] = self.max[j].max(hi);
         }
         for a in 0..6 {
-            let z = ws.output(Axis::ALL[a]);
+            let z = columns[self.output_shape(a)];
+            let n = z.len();
             let mean = z.iter().sum::<f64>() / n as f64;
             let m2 = z.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
             self.combine_moments(a, n as u64, mean, m2);
         }
-        self.count_distinct_rows(ws);
-        for axis in Axis::ALL {
-            let (lo, hi) = ws.measured_range(axis);
-            let m = &mut self.measured[axis as usize];
+        self.count_distinct_rows(columns);
+        for (m, (lo, hi)) in self.measured.iter_mut().zip(measured) {
             *m = (m.0.min(lo), m.1.max(hi));
         }
-        for (k, m) in self.motion.iter_mut().enumerate() {
-            let (lo, hi) = ws.motion_range(k);
+        for (m, (lo, hi)) in self.motion.iter_mut().zip(motion) {
             *m = (m.0.min(lo), m.1.max(hi));
         }
-        STACKED.with_borrow_mut(|s| {
-            s.a.resize_with(n, q, |_, _| 0.0);
-            for j in 0..q {
-                s.a.col_as_slice_mut(j)
-                    .copy_from_slice(self.data_column(ws, j));
-            }
-            fold_into(&mut self.r, s);
-        });
-        self.count += n as u64;
         Ok(())
+    }
+
+    /// The shape of the output of axis `a` (0..6; outputs have shapes of their own).
+    fn output_shape(&self, a: usize) -> usize {
+        self.shape[self.p + a].0
     }
 
     /// For each structure column, whether this accumulator stores its data (one column
     /// per shape; the others are multiples of a stored one).
+    #[cfg(test)]
     pub(crate) fn stored_columns(&self) -> &[bool] {
         &self.stored
     }
@@ -341,18 +390,19 @@ impl Accumulator {
         self.motion[k]
     }
 
-    /// Hashes the regressor rows of the assembled chunk into the distinct-row set until
-    /// it is full (then nothing more is hashed).
-    fn count_distinct_rows(&mut self, ws: &Workspace) {
+    /// Hashes the regressor rows of new samples (`columns[u]` the data of shape u) into
+    /// the distinct-row set until it is full (then nothing more is hashed).
+    fn count_distinct_rows(&mut self, columns: &[&[f64]]) {
         if self.distinct.len() >= DISTINCT_ROWS_CAP {
             return;
         }
         let cols: Vec<&[f64]> = (0..self.rows())
             .filter(|&u| self.representative[u] < self.p)
-            .map(|u| self.data_column(ws, u))
+            .map(|u| columns[u])
             .collect();
+        let n = columns.first().map_or(0, |c| c.len());
         let set = Arc::make_mut(&mut self.distinct);
-        for i in 0..ws.len() {
+        for i in 0..n {
             let mut h = DefaultHasher::new();
             for c in &cols {
                 // + 0.0 maps −0 to +0.
