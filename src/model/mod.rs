@@ -70,6 +70,7 @@
 // `local_effects` (ground effect, wakes, vortex ring), `kernels` (the SIMD column
 // kernels), `reuse` (columns from earlier columns), `assemble`, `predict`, `workspace`.
 mod assemble;
+mod attitude;
 mod eq22;
 mod evaluate;
 mod kernels;
