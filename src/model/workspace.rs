@@ -103,13 +103,13 @@ impl Workspace {
     }
 }
 
+/// Smallest and largest value of six signals.
+pub(crate) type Ranges = [(f64, f64); 6];
+
 /// The measured output ranges (per axis; (0, 0) without measured outputs) and the motion
 /// ranges (u, v, w, p, q, r) of the rows `rows` of `chunk`, as [`Workspace::gather`]
 /// gives them.
-pub(crate) fn row_ranges(
-    chunk: &SampleChunk,
-    rows: &[usize],
-) -> ([(f64, f64); 6], [(f64, f64); 6]) {
+pub(crate) fn row_ranges(chunk: &SampleChunk, rows: &[usize]) -> (Ranges, Ranges) {
     let measured = Axis::ALL.map(
         |axis| match chunk.wrench[axis as usize].get(..chunk.len()) {
             Some(z) => range_of(rows.iter().map(|&i| z[i])),
