@@ -64,6 +64,9 @@ struct BoxPass {
     lo: usize,
     /// Index in `t` one past the last sample known to be in the next sample's window.
     hi: usize,
+    /// One average per channel, handed to `drain`'s `out` (reused, not reallocated per
+    /// sample).
+    y: Vec<f64>,
 }
 
 impl BoxPass {
@@ -77,6 +80,7 @@ impl BoxPass {
             next: 0,
             lo: 0,
             hi: 0,
+            y: vec![0.0; channels],
         }
     }
 
@@ -91,7 +95,7 @@ impl BoxPass {
     /// Averages every sample whose window is complete (all of it when `end`), handing
     /// each time and its averages to `out` in order.
     fn drain(&mut self, end: bool, mut out: impl FnMut(f64, &[f64])) {
-        let mut y = vec![0.0; self.channels];
+        let mut y = std::mem::take(&mut self.y);
         while self.next < self.t.len() {
             let tk = self.t[self.next];
             while self.hi < self.t.len() && self.t[self.hi] <= tk + self.half {
@@ -99,7 +103,7 @@ impl BoxPass {
             }
             // The window is complete once a later sample lies beyond it.
             if self.hi == self.t.len() && !end {
-                return;
+                break;
             }
             while self.t[self.lo] < tk - self.half {
                 self.lo += 1;
@@ -123,6 +127,7 @@ impl BoxPass {
             self.hi -= drop;
             self.lo = 0;
         }
+        self.y = y;
     }
 }
 

@@ -31,6 +31,7 @@
 mod triangular_update;
 
 use std::hash::{DefaultHasher, Hasher};
+use std::sync::Arc;
 
 use faer::{Mat, MatMut};
 pub(crate) use triangular_update::{FoldScratch, fold_rows};
@@ -96,9 +97,12 @@ pub struct Accumulator {
     max: Vec<f64>,
     out_mean: [f64; 6],
     out_m2: [f64; 6],
-    labels: Vec<String>,
-    /// Sorted hashes of the distinct regressor rows seen, at most [`DISTINCT_ROWS_CAP`].
-    distinct: Vec<u64>,
+    /// Label of each augmented column (shared, not copied, by [`Accumulator::select`]'s
+    /// thousands of trial statistics).
+    labels: Vec<Arc<str>>,
+    /// Sorted hashes of the distinct regressor rows seen, at most [`DISTINCT_ROWS_CAP`]
+    /// (shared with the statistics selected from these until either adds one).
+    distinct: Arc<Vec<u64>>,
     /// Smallest and largest measured output per axis (before the known terms).
     measured: [(f64, f64); 6],
     /// Smallest and largest u, v, w, p, q, r.
@@ -146,8 +150,12 @@ impl Accumulator {
     /// An empty accumulator sized for `structure` (all its columns and six outputs).
     pub fn new(structure: &ModelStructure) -> Self {
         let p = structure.columns.len();
-        let mut labels: Vec<String> = structure.columns.iter().map(column_field).collect();
-        labels.extend(Axis::ALL.iter().map(|a| format!("output {a}")));
+        let mut labels: Vec<Arc<str>> = structure
+            .columns
+            .iter()
+            .map(|c| column_field(c).into())
+            .collect();
+        labels.extend(Axis::ALL.iter().map(|a| format!("output {a}").into()));
         let (mut shape, mut representative) = column_shapes(&structure.columns);
         for a in 0..6 {
             representative.push(p + a);
@@ -166,7 +174,7 @@ impl Accumulator {
             out_mean: [0.0; 6],
             out_m2: [0.0; 6],
             labels,
-            distinct: Vec::new(),
+            distinct: Arc::default(),
             measured: [(f64::INFINITY, f64::NEG_INFINITY); 6],
             motion: [(f64::INFINITY, f64::NEG_INFINITY); 6],
         }
@@ -211,43 +219,14 @@ impl Accumulator {
             return Ok(());
         }
         let q = self.rows();
-        for u in 0..q {
-            let col = self.data_column(ws, u);
-            if !crate::util::all_finite(col) {
-                let i = col.iter().position(|v| !v.is_finite()).unwrap_or(0);
-                return Err(AccumulateError::NonFinite {
-                    field: self.labels[self.representative[u]].clone(),
-                    sample: self.count + i as u64,
-                });
-            }
-        }
-        for j in 0..q {
-            let col = self.data_column(ws, j);
-            let (lo, hi) = crate::util::range_of_slice(col);
-            self.min[j] = self.min[j].min(lo);
-            self.max[j] = self.max[j].max(hi);
-        }
-        for a in 0..6 {
-            let z = ws.output(Axis::ALL[a]);
-            let mean = z.iter().sum::<f64>() / n as f64;
-            let m2 = z.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
-            self.combine_moments(a, n as u64, mean, m2);
-        }
-        self.count_distinct_rows(ws);
-        for axis in Axis::ALL {
-            let (lo, hi) = ws.measured_range(axis);
-            let m = &mut self.measured[axis as usize];
-            *m = (m.0.min(lo), m.1.max(hi));
-        }
-        for (k, m) in self.motion.iter_mut().enumerate() {
-            let (lo, hi) = ws.motion_range(k);
-            *m = (m.0.min(lo), m.1.max(hi));
-        }
+        let columns: Vec<&[f64]> = (0..q).map(|u| self.data_column(ws, u)).collect();
+        let measured = Axis::ALL.map(|axis| ws.measured_range(axis));
+        let motion = std::array::from_fn(|k| ws.motion_range(k));
+        self.take_in(&columns, measured, motion)?;
         STACKED.with_borrow_mut(|s| {
             s.a.resize_with(n, q, |_, _| 0.0);
-            for j in 0..q {
-                s.a.col_as_slice_mut(j)
-                    .copy_from_slice(self.data_column(ws, j));
+            for (j, col) in columns.iter().enumerate() {
+                s.a.col_as_slice_mut(j).copy_from_slice(col);
             }
             fold_into(&mut self.r, s);
         });
@@ -255,8 +234,86 @@ impl Accumulator {
         Ok(())
     }
 
+    /// Folds in the rows `rows` (ascending) of `chunk`, last assembled into `ws` by the
+    /// same structure: the same statistics as [`Accumulator::push_assembled`] of those
+    /// rows gathered ([`Workspace::gather`]), the rows copied straight into the fold.
+    pub(crate) fn push_rows(
+        &mut self,
+        ws: &Workspace,
+        chunk: &SampleChunk,
+        rows: &[usize],
+    ) -> Result<(), AccumulateError> {
+        let n = rows.len();
+        if n == 0 {
+            return Ok(());
+        }
+        let q = self.rows();
+        let (measured, motion) = crate::model::row_ranges(chunk, rows);
+        STACKED.with_borrow_mut(|s| {
+            s.a.resize_with(n, q, |_, _| 0.0);
+            for u in 0..q {
+                let src = self.data_column(ws, u);
+                for (d, &i) in s.a.col_as_slice_mut(u).iter_mut().zip(rows) {
+                    *d = src[i];
+                }
+            }
+            let columns: Vec<&[f64]> = (0..q).map(|u| s.a.col_as_slice(u)).collect();
+            self.take_in(&columns, measured, motion)?;
+            fold_into(&mut self.r, s);
+            Ok::<(), AccumulateError>(())
+        })?;
+        self.count += n as u64;
+        Ok(())
+    }
+
+    /// Checks the data of `n` new samples, `columns[u]` of shape u, and takes in all but
+    /// their factor: column ranges, output moments, distinct rows, the measured and
+    /// motion ranges. Nothing changes when a value is not finite.
+    fn take_in(
+        &mut self,
+        columns: &[&[f64]],
+        measured: [(f64, f64); 6],
+        motion: [(f64, f64); 6],
+    ) -> Result<(), AccumulateError> {
+        for (u, col) in columns.iter().enumerate() {
+            if !crate::util::all_finite(col) {
+                let i = col.iter().position(|v| !v.is_finite()).unwrap_or(0);
+                return Err(AccumulateError::NonFinite {
+                    field: self.labels[self.representative[u]].to_string(),
+                    sample: self.count + i as u64,
+                });
+            }
+        }
+        for (j, col) in columns.iter().enumerate() {
+            let (lo, hi) = crate::util::range_of_slice(col);
+            self.min[j] = self.min[j].min(lo);
+            self.max[j] = self.max[j].max(hi);
+        }
+        for a in 0..6 {
+            let z = columns[self.output_shape(a)];
+            let n = z.len();
+            let mean = z.iter().sum::<f64>() / n as f64;
+            let m2 = z.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
+            self.combine_moments(a, n as u64, mean, m2);
+        }
+        self.count_distinct_rows(columns);
+        for (m, (lo, hi)) in self.measured.iter_mut().zip(measured) {
+            *m = (m.0.min(lo), m.1.max(hi));
+        }
+        for (m, (lo, hi)) in self.motion.iter_mut().zip(motion) {
+            *m = (m.0.min(lo), m.1.max(hi));
+        }
+        Ok(())
+    }
+
+    /// The shape of the output of axis `a` (0..6; outputs have shapes of their own).
+    fn output_shape(&self, a: usize) -> usize {
+        self.shape[self.p + a].0
+    }
+
     /// For each structure column, whether this accumulator stores its data (one column
     /// per shape; the others are multiples of a stored one).
+    #[cfg(test)]
     pub(crate) fn stored_columns(&self) -> &[bool] {
         &self.stored
     }
@@ -286,8 +343,11 @@ impl Accumulator {
         for a in 0..6 {
             self.combine_moments(a, other.count, other.out_mean[a], other.out_m2[a]);
         }
-        for &h in &other.distinct {
-            insert_distinct(&mut self.distinct, h);
+        if self.distinct.len() < DISTINCT_ROWS_CAP {
+            let set = Arc::make_mut(&mut self.distinct);
+            for &h in other.distinct.iter() {
+                insert_distinct(set, h);
+            }
         }
         for (m, o) in self
             .measured
@@ -349,24 +409,26 @@ impl Accumulator {
         self.motion[k]
     }
 
-    /// Hashes the regressor rows of the assembled chunk into the distinct-row set until
-    /// it is full (then nothing more is hashed).
-    fn count_distinct_rows(&mut self, ws: &Workspace) {
+    /// Hashes the regressor rows of new samples (`columns[u]` the data of shape u) into
+    /// the distinct-row set until it is full (then nothing more is hashed).
+    fn count_distinct_rows(&mut self, columns: &[&[f64]]) {
         if self.distinct.len() >= DISTINCT_ROWS_CAP {
             return;
         }
         let cols: Vec<&[f64]> = (0..self.rows())
             .filter(|&u| self.representative[u] < self.p)
-            .map(|u| self.data_column(ws, u))
+            .map(|u| columns[u])
             .collect();
-        for i in 0..ws.len() {
+        let n = columns.first().map_or(0, |c| c.len());
+        let set = Arc::make_mut(&mut self.distinct);
+        for i in 0..n {
             let mut h = DefaultHasher::new();
             for c in &cols {
                 // + 0.0 maps −0 to +0.
                 h.write_u64((c[i] + 0.0).to_bits());
             }
-            insert_distinct(&mut self.distinct, h.finish());
-            if self.distinct.len() >= DISTINCT_ROWS_CAP {
+            insert_distinct(set, h.finish());
+            if set.len() >= DISTINCT_ROWS_CAP {
                 return;
             }
         }
@@ -388,6 +450,16 @@ impl Accumulator {
     /// multiples of each other, here and in every statistic derived from this one.
     pub(crate) fn shape_of(&self, j: usize) -> usize {
         self.shape[j].0
+    }
+
+    /// Writes the factor column of augmented column j into `dst` (`rows()` values):
+    /// [`Accumulator::r_column`] without allocating.
+    pub(crate) fn write_r_column(&self, j: usize, dst: &mut [f64]) {
+        let (u, f) = self.shape[j];
+        let q = self.rows();
+        for (d, v) in dst.iter_mut().zip(&self.r[u * q..(u + 1) * q]) {
+            *d = f * v;
+        }
     }
 
     /// Factor column of augmented column j (`rows()` values).
@@ -605,8 +677,8 @@ impl Accumulator {
                 .collect(),
             out_mean: self.out_mean,
             out_m2: self.out_m2,
-            labels: keep.iter().map(|&j| self.labels[j].clone()).collect(),
-            distinct: self.distinct.clone(),
+            labels: keep.iter().map(|&j| Arc::clone(&self.labels[j])).collect(),
+            distinct: Arc::clone(&self.distinct),
             measured: self.measured,
             motion: self.motion,
         }

@@ -57,14 +57,13 @@ pub fn diagnose_chunks(
         }
     }
     let mut local_parts = ActivityParts::default();
-    let (mut active_ws, mut part_ws) = Default::default();
+    let mut active_ws = Default::default();
     for c in validation_data {
         extended
             .assemble(c, &mut ws)
             .map_err(AccumulateError::from)?;
         let parts = &mut local_parts;
-        set.regions
-            .push(c, &ws, &extended, parts, &mut active_ws, &mut part_ws)?;
+        set.regions.push(c, &ws, &extended, parts, &mut active_ws)?;
     }
     let local_tests = set.regions.per_region(&local_parts, &extended)?;
     let folds = Folds::holdout("validation data", fa.clone(), va);

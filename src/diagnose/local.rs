@@ -29,7 +29,10 @@ impl LocalRegions {
     /// geometry for the signals. At most 64 (a bit each in an activity pattern; the
     /// candidate library has five).
     pub fn new(base: &ModelStructure, candidates: &[Candidate]) -> Self {
+        // Only the activity columns are read: no known terms, so assembling them
+        // computes no outputs' known terms and none of their signals.
         let mut activity = base.select_columns(&[]);
+        activity.known = Default::default();
         let mut regions = Vec::new();
         let mut thresholds = Vec::new();
         for (c, cand) in candidates.iter().enumerate() {
@@ -69,10 +72,10 @@ impl LocalRegions {
     /// Pushes the samples of `chunk` where some region's candidate acts into `into`, by
     /// activity pattern (the regions acting at the sample): a sample in several regions
     /// is folded once. `assembled` must hold `chunk` as an accumulator over `extended`
-    /// assembles it: the active rows are gathered from it rather than assembled again
+    /// assembles it: the active rows are taken from it rather than assembled again
     /// (every regressor is a function of its own sample, so this is the same as
-    /// assembling the active part). `active_ws` takes the activity signals, `part_ws` the
-    /// gathered rows (both reused across chunks).
+    /// assembling the active part). `active_ws` takes the activity signals (reused
+    /// across chunks).
     pub fn push(
         &self,
         chunk: &SampleChunk,
@@ -80,14 +83,20 @@ impl LocalRegions {
         extended: &ModelStructure,
         into: &mut ActivityParts,
         active_ws: &mut Workspace,
-        part_ws: &mut Workspace,
     ) -> Result<(), AccumulateError> {
         if self.is_empty() || chunk.is_empty() {
             return Ok(());
         }
-        self.activity
-            .assemble(chunk, active_ws)
-            .map_err(AccumulateError::from)?;
+        // The activity signals are among the candidates' (each region's candidate acts
+        // through them), so they are read from the extended assembly.
+        let reused = self
+            .activity
+            .assemble_columns_from(chunk, extended, assembled, active_ws);
+        if reused.is_none() {
+            self.activity
+                .assemble(chunk, active_ws)
+                .map_err(AccumulateError::from)?;
+        }
         let signals: Vec<&[f64]> = (0..self.len()).map(|k| active_ws.column(k)).collect();
         let patterns = activity_patterns(&signals, &self.thresholds);
         // The distinct patterns that act, ascending (a handful per chunk).
@@ -103,8 +112,7 @@ impl LocalRegions {
             rows.clear();
             rows.extend((0..patterns.len()).filter(|&i| patterns[i] == pattern));
             let acc = into.part(pattern, extended);
-            assembled.gather(chunk, &rows, acc.stored_columns(), part_ws);
-            acc.push_assembled(part_ws)?;
+            acc.push_rows(assembled, chunk, &rows)?;
         }
         Ok(())
     }
@@ -305,6 +313,31 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Rows folded straight from the assembled chunk give the statistics of the same
+    /// rows gathered and pushed, bit for bit; a non-finite value is refused alike.
+    #[test]
+    fn rows_pushed_from_the_assembly_equal_the_rows_gathered_and_pushed() {
+        let (all, s) = quad_x_sweep(300, 4);
+        let mut ws = Workspace::default();
+        s.assemble(&all, &mut ws).unwrap();
+        let (mut gathered, mut direct) = (Accumulator::new(&s), Accumulator::new(&s));
+        let mut part_ws = Workspace::default();
+        for rows in [vec![0, 3, 4, 299], (10..200).step_by(3).collect(), vec![7]] {
+            ws.gather(&all, &rows, gathered.stored_columns(), &mut part_ws);
+            gathered.push_assembled(&part_ws).unwrap();
+            direct.push_rows(&ws, &all, &rows).unwrap();
+            assert_eq!(direct, gathered);
+        }
+        let mut bad = all.clone();
+        bad.velocity[0][5] = f64::NAN;
+        s.assemble(&bad, &mut ws).unwrap();
+        let rows = vec![2, 5, 9];
+        ws.gather(&bad, &rows, gathered.stored_columns(), &mut part_ws);
+        let refused = gathered.push_assembled(&part_ws).unwrap_err();
+        assert_eq!(direct.push_rows(&ws, &bad, &rows).unwrap_err(), refused);
+        assert_eq!(direct, gathered, "nothing taken in");
     }
 
     #[test]

@@ -11,7 +11,7 @@
 //! all held-out predictions laid end to end.
 
 use super::inference::{ErrorSums, error_sums};
-use super::{AxisMetrics, EstimateError, FitOptions, SingularValues, fit_without_fsoa};
+use super::{AxisMetrics, EstimateError, FitOptions, SingularValues, theta_only};
 use crate::model::ModelStructure;
 use crate::sample::Axis;
 use crate::stats::{AccumulateError, Accumulator};
@@ -153,9 +153,9 @@ pub fn cross_validate(
     let mut pooled = Axis::ALL.map(ErrorSums::empty);
     let mut per_fold = Vec::with_capacity(folds.len());
     for (train, test) in folds.train.iter().zip(&folds.test) {
-        // Only the estimates are used: no condition numbers.
-        let f = fit_without_fsoa(structure, train, options, SingularValues::WhenRankInDoubt)?;
-        let sums = error_sums(structure, &f.mmr.theta, test)?;
+        // Only the estimates are used: no condition numbers, no t-tests.
+        let theta = theta_only(structure, train, options, SingularValues::WhenRankInDoubt)?;
+        let sums = error_sums(structure, &theta, test)?;
         for (p, s) in pooled.iter_mut().zip(&sums) {
             p.add(s);
         }

@@ -92,11 +92,13 @@ pub(crate) fn solve(
     let m = acc.rows();
     let mut g = Mat::<f64>::zeros(6 * m, np);
     let mut rhs = vec![0.0; 6 * m];
+    let mut r_col = vec![0.0; m];
     for k in 0..6 {
         for (c, col) in structure.columns.iter().enumerate() {
             let lik = l[col.axis as usize][k];
             if lik != 0.0 {
-                for (i, rv) in acc.r_column(c).into_iter().enumerate() {
+                acc.write_r_column(c, &mut r_col);
+                for (i, &rv) in r_col.iter().enumerate() {
                     g[(k * m + i, col.param.index())] += lik * rv;
                 }
             }

@@ -194,46 +194,15 @@ pub(crate) fn fit_without_fsoa(
     options: &FitOptions,
     singular_values: SingularValues,
 ) -> Result<Fit, EstimateError> {
-    if acc.n_columns() != structure.columns.len() {
-        return Err(EstimateError::ShapeMismatch {
-            parameters: structure.params.len(),
-            theta: structure.params.len(),
-            columns: structure.columns.len(),
-            accumulated: acc.n_columns(),
-        });
-    }
-    check_support(structure, acc)?;
-    let n = acc.count() as f64;
-    let mut axes = Vec::with_capacity(6);
-    let mut identifiability = Vec::new();
-    for axis in Axis::ALL {
-        let (ols, report) = ols::axis_ols_with(structure, acc, axis, options, singular_values)?;
-        identifiability.push(report);
-        let fsoa = FsoaTable::empty(axis, options.f_in);
-        axes.push(AxisFit { ols, fsoa });
-    }
-    let residual_covariance = residual_covariance(acc, &axes);
-    // Each variance is at least (ε · rms z_i)², the rounding level of the output.
-    let floor = Axis::ALL.map(|a| {
-        let zc = acc.output_index(a);
-        (f64::EPSILON.powi(2) * acc.cross(zc, zc) / n).max(f64::MIN_POSITIVE)
-    });
-    let sol = mmr::solve(
-        structure,
-        acc,
-        &residual_covariance,
-        &floor,
-        options,
-        singular_values,
-    )?;
+    let Solved {
+        axes,
+        residual_covariance,
+        sol,
+        mut identifiability,
+    } = solve_both_steps(structure, acc, options, singular_values)?;
     identifiability.push(sol.conditioning);
+    let n = acc.count() as f64;
     let k = sol.params.len();
-    if n <= k as f64 {
-        return Err(EstimateError::TooFewSamples {
-            samples: acc.count(),
-            parameters: k,
-        });
-    }
     let dof = n - k as f64;
     let mut theta = vec![0.0; structure.params.len()];
     let parameters = sol
@@ -275,6 +244,88 @@ pub(crate) fn fit_without_fsoa(
         },
         overall: OverallMetrics::of(&metrics),
         metrics,
+        identifiability,
+    })
+}
+
+/// The MMR estimates θ̂ (one per parameter of `structure`) of [`fit_without_fsoa`], bit
+/// for bit, and its errors, without what only a report reads (t-tests, metrics, the
+/// estimates' names): for cross-validation folds, which use θ̂ alone.
+pub(crate) fn theta_only(
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    options: &FitOptions,
+    singular_values: SingularValues,
+) -> Result<Vec<f64>, EstimateError> {
+    let Solved { sol, .. } = solve_both_steps(structure, acc, options, singular_values)?;
+    let mut theta = vec![0.0; structure.params.len()];
+    for (j, &p) in sol.params.iter().enumerate() {
+        theta[p.index()] = sol.ls.theta[j];
+    }
+    Ok(theta)
+}
+
+/// Both steps of the estimation: the per-axis OLS fits, their residual covariance and
+/// the MMR solution.
+struct Solved {
+    axes: Vec<AxisFit>,
+    residual_covariance: [[f64; 6]; 6],
+    sol: mmr::MmrSolution,
+    /// The per-axis fits' conditioning (the MMR's is in `sol`).
+    identifiability: Vec<ProblemConditioning>,
+}
+
+/// Steps 1 and 2 of [`fit_without_fsoa`] with its checks: the data support a fit and
+/// there are more samples than estimated parameters.
+fn solve_both_steps(
+    structure: &ModelStructure,
+    acc: &Accumulator,
+    options: &FitOptions,
+    singular_values: SingularValues,
+) -> Result<Solved, EstimateError> {
+    if acc.n_columns() != structure.columns.len() {
+        return Err(EstimateError::ShapeMismatch {
+            parameters: structure.params.len(),
+            theta: structure.params.len(),
+            columns: structure.columns.len(),
+            accumulated: acc.n_columns(),
+        });
+    }
+    check_support(structure, acc)?;
+    let n = acc.count() as f64;
+    let mut axes = Vec::with_capacity(6);
+    let mut identifiability = Vec::new();
+    for axis in Axis::ALL {
+        let (ols, report) = ols::axis_ols_with(structure, acc, axis, options, singular_values)?;
+        identifiability.push(report);
+        let fsoa = FsoaTable::empty(axis, options.f_in);
+        axes.push(AxisFit { ols, fsoa });
+    }
+    let residual_covariance = residual_covariance(acc, &axes);
+    // Each variance is at least (ε · rms z_i)², the rounding level of the output.
+    let floor = Axis::ALL.map(|a| {
+        let zc = acc.output_index(a);
+        (f64::EPSILON.powi(2) * acc.cross(zc, zc) / n).max(f64::MIN_POSITIVE)
+    });
+    let sol = mmr::solve(
+        structure,
+        acc,
+        &residual_covariance,
+        &floor,
+        options,
+        singular_values,
+    )?;
+    let k = sol.params.len();
+    if n <= k as f64 {
+        return Err(EstimateError::TooFewSamples {
+            samples: acc.count(),
+            parameters: k,
+        });
+    }
+    Ok(Solved {
+        axes,
+        residual_covariance,
+        sol,
         identifiability,
     })
 }

@@ -93,7 +93,10 @@ fn spanned_by(structure: &ModelStructure, acc: &Accumulator, cols: &[usize]) -> 
 
 /// The compressed design F[:, cols] (q × k) and target F[:, z_axis] of a column subset.
 pub(crate) fn compressed(acc: &Accumulator, cols: &[usize], axis: Axis) -> (Mat<f64>, Vec<f64>) {
-    let x = Mat::from_fn(acc.rows(), cols.len(), |i, j| acc.r(i, cols[j]));
+    let mut x = Mat::zeros(acc.rows(), cols.len());
+    for (j, &c) in cols.iter().enumerate() {
+        acc.write_r_column(c, x.col_as_slice_mut(j));
+    }
     let z = acc.r_column(acc.output_index(axis));
     (x, z)
 }

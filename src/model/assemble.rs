@@ -54,6 +54,52 @@ impl ModelStructure {
         self.assemble_columns(chunk, ws, Some(wanted), plan)
     }
 
+    /// The regressor columns of `chunk` into `ws`, its signals read from `from`, where
+    /// `source` last assembled `chunk`, rather than computed again (the same values, so
+    /// the same columns as [`Self::assemble`]); only the columns are written (outputs,
+    /// measured and motion ranges of `ws` are left unspecified). `None` (nothing
+    /// written) unless every signal this structure computes is one `source` computed
+    /// (the signals read from the chunk itself are always at hand).
+    pub(crate) fn assemble_columns_from(
+        &self,
+        chunk: &SampleChunk,
+        source: &ModelStructure,
+        from: &Workspace,
+        ws: &mut Workspace,
+    ) -> Option<()> {
+        let n = chunk.len();
+        let slots: Vec<usize> = self
+            .required
+            .iter()
+            .map(|s| match s.is_direct() {
+                // Read from the chunk itself.
+                true => Some(0),
+                false => source.required.binary_search(s).ok(),
+            })
+            .collect::<Option<_>>()?;
+        if from.len() != n {
+            return None;
+        }
+        ws.prepare(n, self.columns.len(), 0);
+        let cap = ws.capacity;
+        let from_cap = from.capacity;
+        let required = &self.required;
+        let lookup = |s: Signal| {
+            let at = required.binary_search(&s).expect("required signal");
+            signal_slice(s, chunk, &from.signals, slots[at] * from_cap, n)
+        };
+        crate::util::vectorized(AssembleColumns {
+            columns: &self.columns,
+            wanted: None,
+            plan: &[],
+            dst: &mut ws.columns,
+            cap,
+            n,
+            lookup: &lookup,
+        });
+        Some(())
+    }
+
     fn assemble_columns(
         &self,
         chunk: &SampleChunk,
@@ -174,5 +220,66 @@ mod tests {
         for axis in Axis::ALL {
             assert_eq!(part.output(axis), ws.output(axis));
         }
+    }
+
+    /// Columns assembled from another structure's signals are those assembled from the
+    /// chunk, bit for bit; without those signals nothing is assembled.
+    #[test]
+    fn columns_from_another_assembly_s_signals_are_the_same_columns() {
+        let v = crate::model::test_quad();
+        let s = ModelStructure::eq22(&v, ModelOptions::default());
+        let mut chunk = SampleChunk::with_capacity(4, 40, true);
+        for k in 0..40 {
+            let f = k as f64;
+            chunk.push(&Sample {
+                velocity: [0.2 * f - 3.0, (0.3 * f).cos(), 0.1 * f],
+                rates: [0.02 * f, -0.1, (0.1 * f).sin()],
+                omega: vec![500.0 + 2.0 * f; 4],
+                omega_dot: vec![3.0 - 0.1 * f; 4],
+                ..Sample::default()
+            });
+        }
+        let mut ws = Workspace::default();
+        s.assemble(&chunk, &mut ws).unwrap();
+        // Every other column of eq22 as a parameter of its own, no known terms: only
+        // signals eq22 computes.
+        let mut part = s.select_columns(&[]);
+        part.known = Default::default();
+        for (j, c) in s.columns.iter().enumerate().step_by(2) {
+            let p = Parameter {
+                name: format!("c{j}"),
+                unit: "-".into(),
+            };
+            part.add_parameter(p, vec![c.clone()]);
+        }
+        let (mut direct, mut reused) = (Workspace::default(), Workspace::default());
+        part.assemble(&chunk, &mut direct).unwrap();
+        assert!(
+            part.assemble_columns_from(&chunk, &s, &ws, &mut reused)
+                .is_some()
+        );
+        for j in 0..part.columns.len() {
+            let bits = |w: &Workspace| w.column(j).iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&reused), bits(&direct), "column {j}");
+        }
+        // A structure of no computed signals has none of eq22's to lend.
+        let mut bare = s.select_columns(&[]);
+        bare.known = Default::default();
+        let u = Column {
+            axis: Axis::Fx,
+            param: ParamId::default(),
+            label: "u".into(),
+            terms: vec![term(1.0, &[Signal::U])],
+        };
+        let p = Parameter {
+            name: "u".into(),
+            unit: "-".into(),
+        };
+        bare.add_parameter(p, vec![u]);
+        bare.assemble(&chunk, &mut direct).unwrap();
+        assert!(
+            s.assemble_columns_from(&chunk, &bare, &direct, &mut reused)
+                .is_none()
+        );
     }
 }

@@ -3,6 +3,7 @@
 //! and the candidate signals of [`super::local_effects`], from the vehicle constants they
 //! need ([`SignalConstants`]).
 
+use super::attitude::per_attitude;
 use super::local_effects::{ground_effect_factor, vortex_ring_onset, wake_overlaps};
 use super::signals::{Signal, in_plane_speed};
 use crate::mixing::{Mixing, mix_row};
@@ -130,12 +131,12 @@ impl SignalConstants {
                 let [x, y] = self.hubs[usize::from(i)];
                 let (r, h) = (self.rotor_radius, self.hub_height);
                 let (height, attitude) = (present(&chunk.height), present(&chunk.attitude));
-                for (k, d) in dst.iter_mut().enumerate() {
+                per_attitude(attitude, height, dst, |m, z| {
                     // Third row of body→NED: the down component of a body vector.
-                    let down = body_to_ned(attitude, k)[2];
+                    let down = m[2];
                     let hub_down = down[0] * x + down[1] * y - down[2] * h;
-                    *d = ground_effect_factor(r, height[k] - hub_down);
-                }
+                    ground_effect_factor(r, z - hub_down)
+                });
             }
             WakeImmersion(i) => {
                 let (u, v) = (&chunk.velocity[0][..n], &chunk.velocity[1][..n]);
@@ -191,10 +192,8 @@ impl SignalConstants {
             NedToBody(e) => {
                 let (k, j) = (usize::from(e) / 3, usize::from(e) % 3);
                 let attitude = present(&chunk.attitude);
-                for (i, d) in dst.iter_mut().enumerate() {
-                    // The NED→body element (k, j) is body→NED's (j, k).
-                    *d = body_to_ned(attitude, i)[j][k];
-                }
+                // The NED→body element (k, j) is body→NED's (j, k).
+                per_attitude(attitude, &attitude[0], dst, |m, _| m[j][k]);
             }
             VortexRing(i) => {
                 let [x, y] = self.hubs[usize::from(i)];
@@ -267,13 +266,6 @@ fn present<T>(signal: &Option<T>) -> &T {
     signal
         .as_ref()
         .expect("a signal the structure needs (checked by `check_chunk`)")
-}
-
-/// Body→NED rotation of sample `k` from the attitude quaternion series `q` (normalised).
-fn body_to_ned(q: &[Vec<f64>; 4], k: usize) -> [[f64; 3]; 3] {
-    let quat = [q[0][k], q[1][k], q[2][k], q[3][k]];
-    let norm = quat.iter().map(|c| c * c).sum::<f64>().sqrt();
-    crate::util::quat_to_matrix(quat.map(|c| c / norm))
 }
 
 #[cfg(test)]

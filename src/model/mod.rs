@@ -70,6 +70,7 @@
 // `local_effects` (ground effect, wakes, vortex ring), `kernels` (the SIMD column
 // kernels), `reuse` (columns from earlier columns), `assemble`, `predict`, `workspace`.
 mod assemble;
+mod attitude;
 mod eq22;
 mod evaluate;
 mod kernels;
@@ -87,6 +88,7 @@ pub(crate) use reuse::Reuse;
 pub use signals::{Column, ParamId, Parameter, Signal, Term, term};
 pub use structure::{ModelError, ModelStructure};
 pub use workspace::Workspace;
+pub(crate) use workspace::row_ranges;
 
 /// A quadrotor × (arm 0.25 m, R = 0.1 m, h = 0.05 m, 1 kg) for the model's unit tests.
 #[cfg(test)]

@@ -92,15 +92,8 @@ impl Workspace {
         for axis in Axis::ALL {
             let a = axis as usize;
             pick(self.output(axis), &mut into.outputs[a * cap..a * cap + m]);
-            into.measured[a] = match chunk.wrench[a].get(..chunk.len()) {
-                Some(z) => range_of(rows.iter().map(|&i| z[i])),
-                None => (0.0, 0.0),
-            };
         }
-        for k in 0..3 {
-            into.motion[k] = range_of(rows.iter().map(|&i| chunk.velocity[k][i]));
-            into.motion[3 + k] = range_of(rows.iter().map(|&i| chunk.rates[k][i]));
-        }
+        (into.measured, into.motion) = row_ranges(chunk, rows);
     }
 
     /// Measured output of `axis` minus the known terms, for the last assembled chunk.
@@ -108,4 +101,25 @@ impl Workspace {
         let a = axis as usize;
         &self.outputs[a * self.capacity..a * self.capacity + self.len]
     }
+}
+
+/// Smallest and largest value of six signals.
+pub(crate) type Ranges = [(f64, f64); 6];
+
+/// The measured output ranges (per axis; (0, 0) without measured outputs) and the motion
+/// ranges (u, v, w, p, q, r) of the rows `rows` of `chunk`, as [`Workspace::gather`]
+/// gives them.
+pub(crate) fn row_ranges(chunk: &SampleChunk, rows: &[usize]) -> (Ranges, Ranges) {
+    let measured = Axis::ALL.map(
+        |axis| match chunk.wrench[axis as usize].get(..chunk.len()) {
+            Some(z) => range_of(rows.iter().map(|&i| z[i])),
+            None => (0.0, 0.0),
+        },
+    );
+    let mut motion = [(0.0, 0.0); 6];
+    for k in 0..3 {
+        motion[k] = range_of(rows.iter().map(|&i| chunk.velocity[k][i]));
+        motion[3 + k] = range_of(rows.iter().map(|&i| chunk.rates[k][i]));
+    }
+    (measured, motion)
 }

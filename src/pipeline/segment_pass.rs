@@ -34,7 +34,6 @@ struct SegmentState<'a> {
     first: [u64; 2],
     ws: Workspace,
     active_ws: Workspace,
-    part_ws: Workspace,
     /// The samples the plots keep of a part, and their regressors.
     plot_rows: SampleChunk,
     plot_ws: Workspace,
@@ -59,7 +58,6 @@ impl<'a> SegmentPass<'a> {
                 first: at.in_log,
                 ws: Workspace::default(),
                 active_ws: Workspace::default(),
-                part_ws: Workspace::default(),
                 plot_rows: SampleChunk::default(),
                 plot_ws: Workspace::default(),
             },
@@ -136,7 +134,6 @@ impl SegmentState<'_> {
                         &ext.structure,
                         &mut share.local[g],
                         &mut self.active_ws,
-                        &mut self.part_ws,
                     )
                     .map_err(accumulate_error(source))?;
             }

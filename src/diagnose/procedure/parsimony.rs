@@ -5,7 +5,7 @@
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use super::outcome::Unsupported;
-use super::trial::{CandidateStatistics, Trial, held_out, trial};
+use super::trial::{CandidateStatistics, Trial, held_out, trial_with_held_out};
 use crate::diagnose::options::DiagnoseOptions;
 use crate::estimate::{CrossValidation, FitOptions};
 use crate::model::ParamId;
@@ -27,6 +27,18 @@ fn cv_score(cv: &CrossValidation, scale: &[[f64; 6]]) -> f64 {
 /// its mean square), so 1e-12 of it stays far below the noise bound κ χ²₁(1 − α) ≥ 2.7
 /// for any log, and far above the rounding of the sums (~1e-16 relative).
 const SCORE_TIE: f64 = 1e-12;
+
+/// Leaving out one term of the current model, as scored on the folds.
+struct Removal {
+    /// The term: a parameter's columns on one axis.
+    term: (ParamId, Axis),
+    /// Cross-validation score of the model without it.
+    score: f64,
+    /// Columns of the model without it (indices into `stats.extended`).
+    without: Vec<usize>,
+    /// Its held-out errors.
+    cv: CrossValidation,
+}
 
 /// Leaves out terms (a parameter's columns on one axis) of the model with columns `kept`
 /// one at a time while it stays within noise of the best cross-validated score (module
@@ -66,35 +78,42 @@ pub(super) fn prune(
             break;
         }
         // Each removal scored on the folds only; the one chosen is then fitted in full.
-        let mut removals: Vec<((ParamId, Axis), f64, Vec<usize>)> =
-            map_on_threads(&terms, threads, |&term| {
-                let without: Vec<usize> = kept
-                    .iter()
-                    .copied()
-                    .filter(|&j| (column(j).param, column(j).axis) != term)
-                    .collect();
-                let structure = stats.extended.select_columns(&without);
-                let cv = held_out(stats, &structure, &without, fit_options).ok()?;
-                Some((term, cv_score(&cv, &scale), without))
+        let mut removals: Vec<Removal> = map_on_threads(&terms, threads, |&term| {
+            let without: Vec<usize> = kept
+                .iter()
+                .copied()
+                .filter(|&j| (column(j).param, column(j).axis) != term)
+                .collect();
+            let structure = stats.extended.select_columns(&without);
+            let cv = held_out(stats, &structure, &without, fit_options).ok()?;
+            Some(Removal {
+                term,
+                score: cv_score(&cv, &scale),
+                without,
+                cv,
             })
-            .into_iter()
-            .flatten()
-            .collect();
+        })
+        .into_iter()
+        .flatten()
+        .collect();
         let chosen = loop {
-            let Some(i) = cheapest(0..removals.len(), |&i| removals[i].1) else {
+            let Some(i) = cheapest(0..removals.len(), |&i| removals[i].score) else {
                 break None;
             };
-            if removals[i].1 > best + noise {
+            if removals[i].score > best + noise {
                 break None;
             }
             // A removal whose fit on all data fails is no trial model: the next cheapest.
-            match trial(
+            // Its held-out errors are those just scored.
+            let r = &removals[i];
+            match trial_with_held_out(
                 stats,
-                &removals[i].2,
+                &r.without,
+                r.cv.clone(),
                 fit_options,
                 options.variance_inflation,
             ) {
-                Ok(t) => break Some((removals[i].0, removals[i].1, t)),
+                Ok(t) => break Some((r.term, r.score, t)),
                 Err(_) => {
                     removals.remove(i);
                 }

@@ -64,16 +64,51 @@ pub(super) fn trial(
     inflation: f64,
 ) -> Result<Trial, EstimateError> {
     let structure = stats.extended.select_columns(columns);
-    let columns = columns.to_vec();
+    let fit = fit_on_all(stats, &structure, columns, options)?;
+    let cv = held_out(stats, &structure, columns, options)?;
+    Ok(with_inference(fit, cv, structure, columns, inflation))
+}
+
+/// [`trial`] of columns whose held-out errors `cv` ([`held_out`]) are known already.
+pub(super) fn trial_with_held_out(
+    stats: &CandidateStatistics,
+    columns: &[usize],
+    cv: CrossValidation,
+    options: &FitOptions,
+    inflation: f64,
+) -> Result<Trial, EstimateError> {
+    let structure = stats.extended.select_columns(columns);
+    let fit = fit_on_all(stats, &structure, columns, options)?;
+    Ok(with_inference(fit, cv, structure, columns, inflation))
+}
+
+/// The fit of `structure`, the sub-model of `stats.extended` with columns `columns`, on
+/// all fit data.
+fn fit_on_all(
+    stats: &CandidateStatistics,
+    structure: &ModelStructure,
+    columns: &[usize],
+    options: &FitOptions,
+) -> Result<Fit, EstimateError> {
     // The conditioning of a trial is not read: only the adopted model's is reported, from
     // a refit (`diagnose_on_threads`).
-    let fit = estimate::fit_without_fsoa(
-        &structure,
-        &stats.fit.select(&columns),
+    estimate::fit_without_fsoa(
+        structure,
+        &stats.fit.select(columns),
         options,
         SingularValues::WhenRankInDoubt,
-    )?;
-    let cv = held_out(stats, &structure, &columns, options)?;
+    )
+}
+
+/// The trial of `fit` and `cv`: σ and P with the coloured-residual correction
+/// `inflation`.
+fn with_inference(
+    fit: Fit,
+    cv: CrossValidation,
+    structure: ModelStructure,
+    columns: &[usize],
+    inflation: f64,
+) -> Trial {
     let mut std = vec![0.0; structure.params.len()];
     let mut p = vec![1.0; structure.params.len()];
     let inflation = inflation.max(1.0).sqrt();
@@ -82,14 +117,14 @@ pub(super) fn trial(
         std[i] = est.std_error * inflation;
         p[i] = crate::estimate::inference::t_test(est.estimate / std[i], fit.mmr.dof).0;
     }
-    Ok(Trial {
+    Trial {
         fit,
         std,
         p,
         cv,
         structure,
-        columns,
-    })
+        columns: columns.to_vec(),
+    }
 }
 
 /// The held-out errors on every fold of `structure`, the sub-model of `stats.extended`

@@ -54,6 +54,10 @@ pub struct ResidualPass {
     lag_scratch: Vec<f64>,
     head: Rows,
     tail: Rows,
+    /// A chunk's rows ([`ResidualPass::rows`]) and its regressor columns as row-major
+    /// rows: buffers reused from chunk to chunk.
+    chunk_rows: Rows,
+    row_major: Vec<f64>,
     hist: Vec<Histogram>,
     sum: [f64; 6],
 }
@@ -130,6 +134,8 @@ impl ResidualPass {
             lag_scratch: Vec::new(),
             head: Rows::default(),
             tail: Rows::default(),
+            chunk_rows: Rows::default(),
+            row_major: Vec::new(),
             hist,
             sum: [0.0; 6],
         }
@@ -139,7 +145,15 @@ impl ResidualPass {
     /// [`ResidualPass::merge`] for segments processed elsewhere).
     pub fn push(&mut self, chunk: &SampleChunk, ws: &mut Workspace) -> Result<(), AccumulateError> {
         self.structure.assemble(chunk, ws)?;
-        let rows = self.rows(ws);
+        let mut rows = std::mem::take(&mut self.chunk_rows);
+        self.rows(ws, &mut rows);
+        let pushed = self.push_rows(&rows);
+        self.chunk_rows = rows;
+        pushed
+    }
+
+    /// Folds in a chunk's `rows` ([`ResidualPass::rows`]).
+    fn push_rows(&mut self, rows: &Rows) -> Result<(), AccumulateError> {
         let n = rows.len();
         if let Some(i) = rows.v.iter().position(|v| !v.is_finite()) {
             return Err(AccumulateError::NonFinite {
@@ -153,10 +167,10 @@ impl ResidualPass {
             }
         }
         let tail = std::mem::take(&mut self.tail);
-        self.add_cross(&tail, &rows);
+        self.add_cross(&tail, rows);
         self.tail = tail;
-        self.add_within(&rows);
-        self.append(&rows, n as u64);
+        self.add_within(rows);
+        self.append(rows, n as u64);
         Ok(())
     }
 
@@ -165,17 +179,17 @@ impl ResidualPass {
         self.representatives.len()
     }
 
-    /// The assembled chunk's column shapes as rows, and its MMR and OLS residuals
-    /// z − X θ̂ (one matrix product over all columns).
-    fn rows(&self, ws: &Workspace) -> Rows {
+    /// Writes into `rows` the assembled chunk's column shapes as rows, and its MMR and
+    /// OLS residuals z − X θ̂ (one matrix product over all columns).
+    fn rows(&mut self, ws: &Workspace, rows: &mut Rows) {
         let n = ws.len();
         let p = self.p;
-        let x = row_major(ws, p);
+        let mut x = std::mem::take(&mut self.row_major);
+        row_major(ws, p, &mut x);
         let q = self.q();
-        let mut rows = Rows {
-            x: vec![0.0; n * q],
-            v: vec![0.0; n * VW],
-        };
+        // Every entry is written below.
+        rows.x.resize(n * q, 0.0);
+        rows.v.resize(n * VW, 0.0);
         for (shapes, row) in rows.x.chunks_exact_mut(q).zip(x.chunks_exact(p)) {
             for (dst, &c) in shapes.iter_mut().zip(&self.representatives) {
                 *dst = row[c];
@@ -192,7 +206,7 @@ impl ResidualPass {
             let v = MatMut::from_row_major_slice_mut(&mut rows.v, n, VW);
             matmul(v, Accum::Add, x, self.prediction.as_ref(), -1.0, Par::Seq);
         }
-        rows
+        self.row_major = x;
     }
 
     /// Merges `later`, the pass over the segment of the stream that directly follows
@@ -231,10 +245,10 @@ impl ResidualPass {
         if self.head.len() < l {
             self.extend_head(&head_rows);
         }
-        let mut joined = std::mem::take(&mut self.tail);
-        joined.x.append(&mut tail_rows.x);
-        joined.v.append(&mut tail_rows.v);
-        self.tail = last_rows(joined, l, self.q());
+        let q = self.q();
+        self.tail.x.append(&mut tail_rows.x);
+        self.tail.v.append(&mut tail_rows.v);
+        keep_last_rows(&mut self.tail, l, q);
         self.count += later.count;
     }
 
@@ -425,14 +439,12 @@ impl ResidualPass {
         if self.head.len() < l {
             self.extend_head(rows);
         }
-        let mut joined = std::mem::take(&mut self.tail);
-        joined
-            .x
-            .extend_from_slice(&rows.x[rows.x.len() - rows.len().min(l) * self.q()..]);
-        joined
-            .v
+        let (q, tail) = (self.q(), &mut self.tail);
+        tail.x
+            .extend_from_slice(&rows.x[rows.x.len() - rows.len().min(l) * q..]);
+        tail.v
             .extend_from_slice(&rows.v[rows.v.len() - rows.len().min(l) * VW..]);
-        self.tail = last_rows(joined, l, self.q());
+        keep_last_rows(tail, l, q);
         self.count += n;
     }
 
@@ -458,10 +470,12 @@ fn prediction_coefficients(structure: &ModelStructure, fit: &Fit) -> Mat<f64> {
     m
 }
 
-/// The first `w` columns of the chunk assembled in `ws` as row-major rows.
-fn row_major(ws: &Workspace, w: usize) -> Vec<f64> {
+/// Writes into `rows` the first `w` columns of the chunk assembled in `ws` as row-major
+/// rows.
+fn row_major(ws: &Workspace, w: usize, rows: &mut Vec<f64>) {
     let n = ws.len();
-    let mut rows = vec![0.0; n * w];
+    // Every entry is written below.
+    rows.resize(n * w, 0.0);
     // Transposed in blocks of samples, so the rows written stay in L1.
     const BLOCK: usize = 16;
     for t0 in (0..n).step_by(BLOCK) {
@@ -472,18 +486,14 @@ fn row_major(ws: &Workspace, w: usize) -> Vec<f64> {
             }
         }
     }
-    rows
 }
 
-/// The last `l` rows of `rows`.
-fn last_rows(rows: Rows, l: usize, q: usize) -> Rows {
+/// Drops all but the last `l` rows of `rows`.
+fn keep_last_rows(rows: &mut Rows, l: usize, q: usize) {
     let n = rows.len();
-    if n <= l {
-        return rows;
-    }
-    Rows {
-        x: rows.x[(n - l) * q..].to_vec(),
-        v: rows.v[(n - l) * VW..].to_vec(),
+    if n > l {
+        rows.x.drain(..(n - l) * q);
+        rows.v.drain(..(n - l) * VW);
     }
 }
 
