@@ -69,6 +69,10 @@ def fit_fleet(
     read in one process, in the order given. ``groups``: one cross-validation group
     name per log of ``paths`` (e.g. its flight day); the logs of a group are left out
     together, and a log left out as unreadable leaves its group."""
+    if groups is not None and len(groups) != len(paths):
+        raise ValueError(
+            f"groups: one name per log of paths, got {len(groups)} names for {len(paths)} logs"
+        )
     from distributed import get_client
 
     client = client if client is not None else get_client()

@@ -33,6 +33,14 @@ def test_parts_are_the_cli_bytes_and_fit_as_the_direct_fit(cli: Path, tmp_path: 
         mrsysid.merge_stats([sweep, b"not a part"])
 
 
+def test_fleet_groups_name_every_log(tmp_path: Path) -> None:
+    # Refused before any task is sent (the client is never touched).
+    from mrsysid.dask import fit_fleet
+
+    with pytest.raises(ValueError, match="one name per log of paths, got 1 names for 2 logs"):
+        fit_fleet([SWEEP, FLIGHT], QUAD_X, client=object(), groups=["day1"])
+
+
 def split_sweep(tmp_path: Path, logs: int) -> list:
     """The shipped 2000-point sweep cut into `logs` contract CSVs of equal length."""
     lines = SWEEP.read_text().splitlines()
