@@ -180,12 +180,11 @@ impl Accumulator {
         }
     }
 
-    /// True when the accumulator has the layout [`Accumulator::new`] gives `structure`
-    /// (columns, shapes, labels and buffer sizes) and a sorted set of distinct rows
-    /// within its cap: what merging and fitting index by. An accumulator read from a
-    /// file is checked with it before use.
-    pub fn fits_layout_of(&self, structure: &ModelStructure) -> bool {
-        let empty = Self::new(structure);
+    /// True when the accumulator has the layout of `empty` (an [`Accumulator::new`] of
+    /// the structure it should belong to: columns, shapes, labels and buffer sizes) and a
+    /// sorted set of distinct rows within its cap: what merging and fitting index by. An
+    /// accumulator read from a file is checked with it before use.
+    pub fn has_layout_of(&self, empty: &Accumulator) -> bool {
         let q = empty.representative.len();
         self.p == empty.p
             && self.shape == empty.shape

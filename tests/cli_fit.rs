@@ -101,6 +101,30 @@ fn simulate_and_fit(name: &str, extra: &[&str]) -> serde_json::Value {
     json(&report)
 }
 
+/// `mrsysid fit LOG --vehicle data/vehicles/quad_x.toml --no-diagnose --quiet` with
+/// `extra` arguments, its JSON report written to `<name>.json` (the fit must succeed).
+fn fit_without_diagnosis(log: &Path, name: &str, extra: &[&str]) -> serde_json::Value {
+    let report = tmp(&format!("{name}.json"));
+    let mut args = vec![
+        "fit",
+        log.to_str().unwrap(),
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--no-diagnose",
+        "--quiet",
+        "--json",
+        report.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let out = mrsysid(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    json(&report)
+}
+
 #[test]
 fn fit_on_shipped_sweeps_meets_fit_quality_bounds() {
     // Sweeps of the blade-element truth (no undeclared effect) over the scaled Table 1
@@ -845,30 +869,12 @@ fn declared_load_smoothing_is_matched_by_the_regressors_and_hurts_where_absent()
         );
     }
     let fit = |log: &Path, name: &str, low_pass: Option<&str>| {
-        let report = tmp(&format!("{name}.json"));
         let model = tmp(&format!("{name}.toml"));
-        let mut args = vec![
-            "fit",
-            log.to_str().unwrap(),
-            "--vehicle",
-            "data/vehicles/quad_x.toml",
-            "--no-diagnose",
-            "--quiet",
-            "--json",
-            report.to_str().unwrap(),
-            "--model-out",
-            model.to_str().unwrap(),
-        ];
+        let mut extra = vec!["--model-out", model.to_str().unwrap()];
         if let Some(hz) = low_pass {
-            args.extend(["--loads-low-pass", hz]);
+            extra.extend(["--loads-low-pass", hz]);
         }
-        let out = mrsysid(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        (json(&report), model)
+        (fit_without_diagnosis(log, name, &extra), model)
     };
     let (raw, _) = fit(&smoothed, "smoothed_raw", None);
     let (matched, model) = fit(&smoothed, "smoothed_matched", Some("5"));
@@ -1264,33 +1270,11 @@ fn a_data_driven_dynamics_csv_fits_as_the_contract_file() {
         .replace("max_speed = 1100.0", "max_speed = 4400.0");
     let mapping_file = tmp("ddd_layout.toml");
     std::fs::write(&mapping_file, mapping).expect("write mapping");
-    let fit = |log: &Path, mapping: Option<&Path>, name: &str| {
-        let report = tmp(&format!("{name}.json"));
-        let mut args = vec![
-            "fit",
-            log.to_str().unwrap(),
-            "--vehicle",
-            "data/vehicles/quad_x.toml",
-            "--no-diagnose",
-            "--quiet",
-            "--json",
-            report.to_str().unwrap(),
-        ];
-        if let Some(m) = mapping {
-            args.extend(["--mapping", m.to_str().unwrap()]);
-        }
-        let out = mrsysid(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        json(&report)
-    };
     let reference_log = tmp("ddd_reference.csv");
     std::fs::write(&reference_log, reference).expect("write reference");
-    let contract = fit(&reference_log, None, "ddd_ref");
-    let mapped = fit(&log, Some(&mapping_file), "ddd_mapped");
+    let contract = fit_without_diagnosis(&reference_log, "ddd_ref", &[]);
+    let mapping_arg = ["--mapping", mapping_file.to_str().unwrap()];
+    let mapped = fit_without_diagnosis(&log, "ddd_mapped", &mapping_arg);
     assert_eq!(mapped["samples"], contract["samples"]);
     let estimates = |v: &serde_json::Value| -> Vec<(String, f64)> {
         v["parameters"]

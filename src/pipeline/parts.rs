@@ -197,11 +197,8 @@ impl StatsPart {
     /// Refuses a part whose statistics are not laid out as `structure`'s (a file made
     /// with the same settings but altered, whose checksum was made to match).
     fn check_layout(&self, structure: &crate::model::ModelStructure) -> Result<(), StatsError> {
-        match self
-            .logs
-            .iter()
-            .find(|l| !l.stats.fits_layout_of(structure))
-        {
+        let empty = Accumulator::new(structure);
+        match self.logs.iter().find(|l| !l.stats.has_layout_of(&empty)) {
             Some(log) => Err(StatsError::Format {
                 file: log.summary.file.clone(),
                 what: "statistics not laid out for the requested model (columns, shapes or \

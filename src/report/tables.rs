@@ -9,6 +9,7 @@ use std::fmt::Write;
 use super::summary::{AxisRow, DiagnosisReport, FsoaReport, Report};
 use crate::diagnose::Reading;
 use crate::loads_scan::LowPassScan;
+use crate::sample::Axis;
 
 /// All tables, as printed by `mrsysid fit`.
 pub fn render(report: &Report) -> String {
@@ -154,35 +155,30 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
         let _ = writeln!(out, "  what is left: {}", r.sentence());
     }
     for axis in &d.worse_than_base {
-        let at = |rows: &[AxisRow]| {
-            rows.iter()
-                .find(|r| r.axis == *axis)
-                .map_or(f64::NAN, |r| r.r2)
-        };
+        let (b, a) = (axis_row(&d.before, *axis), axis_row(&d.after, *axis));
         let _ = writeln!(
             out,
             "  worse than the Eq. 22 model on the held-out {} data: R2 {:.1}% -> {:.1}% (the \
              terms added and left out pay on all axes together)",
             axis.name(),
-            100.0 * at(&d.before),
-            100.0 * at(&d.after)
+            100.0 * b.map_or(f64::NAN, |r| r.r2),
+            100.0 * a.map_or(f64::NAN, |r| r.r2)
         );
     }
     if let Some(v) = &d.validation {
         for axis in &d.worse_on_validation {
-            let at = |rows: &[AxisRow]| {
-                rows.iter()
-                    .find(|r| r.axis == *axis)
-                    .map_or((f64::NAN, f64::NAN), |r| (r.r2, r.rmse))
-            };
-            let ((r2b, eb), (r2a, ea)) = (at(&v.before), at(&v.after));
+            let (b, a) = (axis_row(&v.before, *axis), axis_row(&v.after, *axis));
+            let [r2b, r2a, eb, ea] = [
+                b.map_or(f64::NAN, |r| 100.0 * r.r2),
+                a.map_or(f64::NAN, |r| 100.0 * r.r2),
+                b.map_or(f64::NAN, |r| r.rmse),
+                a.map_or(f64::NAN, |r| r.rmse),
+            ];
             let _ = writeln!(
                 out,
-                "  worse than the Eq. 22 model on the validation logs' {}: R2 {:.1}% -> {:.1}%, \
-                 RMSE {eb:.4} -> {ea:.4} (no decision saw these data)",
+                "  worse than the Eq. 22 model on the validation logs' {}: R2 {r2b:.1}% -> \
+                 {r2a:.1}%, RMSE {eb:.4} -> {ea:.4} (no decision saw these data)",
                 axis.name(),
-                100.0 * r2b,
-                100.0 * r2a,
             );
         }
     }
@@ -547,6 +543,11 @@ fn identifiability(out: &mut String, r: &Report) {
         let _ = writeln!(out, "  WARNING {}: dropped {} ({why})", d.problem, d.name);
     }
     out.push('\n');
+}
+
+/// The row of `axis` among `rows`, if any.
+fn axis_row(rows: &[AxisRow], axis: Axis) -> Option<&AxisRow> {
+    rows.iter().find(|r| r.axis == axis)
 }
 
 #[cfg(test)]
