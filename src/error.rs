@@ -110,6 +110,31 @@ pub enum StatsError {
         /// The log.
         log: String,
     },
+    /// Parts made without the diagnosis's screening samples, asked to be diagnosed.
+    #[error(
+        "statistics of {logs} were accumulated with the diagnosis off, without its screening samples: accumulate them again with the diagnosis on to diagnose from statistics"
+    )]
+    NotDiagnosable {
+        /// The logs without screening samples.
+        logs: String,
+    },
+    /// A second- or third-pass part made from another plan than the one given (another
+    /// fit, other settings or another diagnosis).
+    #[error(
+        "{file} was made from another plan than this one (another fit, settings or diagnosis): pass its log again with this plan"
+    )]
+    OtherPlan {
+        /// The part (its log).
+        file: String,
+    },
+    /// A log of the fit without its second- or third-pass part.
+    #[error("no {pass} part for {log}: every log of the fit needs one, made from this plan")]
+    MissingPass {
+        /// The log.
+        log: String,
+        /// Which pass ("second-pass" or "remainder").
+        pass: String,
+    },
     /// Fewer than two fit logs: leave one log out needs two.
     #[error(
         "a fit from statistics needs at least two fit logs (each is a fold of leave one log out), got {logs}; fit a single log directly"

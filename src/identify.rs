@@ -60,7 +60,10 @@ use crate::identified::IdentifiedModel;
 use crate::io::{IoError, Mapping, ReadOptions};
 use crate::loads_scan::LowPassScan;
 use crate::model::{ModelOptions, ModelStructure, ParamId, Workspace};
-use crate::pipeline::{self, FitOutcome, FitRequest, Holdout, StatsPart};
+use crate::pipeline::{
+    self, FitOutcome, FitRequest, Holdout, PassPart, PassPlan, PendingFit, PreparedPass,
+    RemainderPart, StatsPart,
+};
 use crate::progress::Progress;
 use crate::report::summary::Report;
 use crate::report::tables;
@@ -290,13 +293,61 @@ impl Identification {
         validate: Option<&StatsPart>,
     ) -> Result<Results, Error> {
         let outcome = pipeline::run_from_parts(&self.request, fit, validate)?;
-        Ok(Results {
+        Ok(self.results_from_stats(outcome))
+    }
+
+    /// The results of a fit from statistics.
+    fn results_from_stats(&self, outcome: FitOutcome) -> Results {
+        Results {
             vehicle: self.request.vehicle.clone(),
             base: self.request.structure.clone(),
             outcome,
             loads_low_pass_hz: self.request.effective_loads_low_pass(),
             loads_low_pass_scan: None,
-        })
+        }
+    }
+
+    /// The plan of the second pass over the logs of `fit` (at least two) and `validate`,
+    /// parts made with the diagnosis on (the default): the first of the three steps of
+    /// the diagnosis from statistics (see [`Identification::diagnose_from_stats`]).
+    pub fn pass_plan(
+        &self,
+        fit: &StatsPart,
+        validate: Option<&StatsPart>,
+    ) -> Result<PassPlan, Error> {
+        pipeline::pass_plan(&self.request, fit, validate)
+    }
+
+    /// `plan` prepared for passing its logs ([`PreparedPass::pass_part`]) and, after
+    /// the diagnosis, their remainder ([`PreparedPass::remainder_part`]): once per
+    /// process, as it fits Eq. 22 and builds the candidate effects.
+    pub fn prepare_pass(&self, plan: PassPlan) -> Result<PreparedPass, Error> {
+        PreparedPass::new(&self.request, plan)
+    }
+
+    /// The fit and diagnosis of the logs of `fit` and `validate` from their first-pass
+    /// parts and one second-pass part per log made from [`Identification::pass_plan`]
+    /// of the same parts. The result waits for the remainder pass
+    /// ([`PendingFit::remainder_plan`]) before [`Identification::finish_from_stats`]:
+    /// then it equals [`Identification::run`] of the same logs in the same order, less
+    /// the plot series.
+    pub fn diagnose_from_stats(
+        &self,
+        fit: &StatsPart,
+        validate: Option<&StatsPart>,
+        passes: &[PassPart],
+    ) -> Result<PendingFit, Error> {
+        pipeline::diagnose_from_parts(&self.request, fit, validate, passes)
+    }
+
+    /// The results of `pending` with the remainder parts `parts` (one per fit log of
+    /// [`PendingFit::remainder_plan`]; none when it is `None`).
+    pub fn finish_from_stats(
+        &self,
+        pending: PendingFit,
+        parts: &[RemainderPart],
+    ) -> Result<Results, Error> {
+        pending.finish(parts).map(|o| self.results_from_stats(o))
     }
 
     /// The request as built.

@@ -425,7 +425,9 @@ impl AccumulateArgs {
         let mut job = self
             .model
             .identification(vehicle, mapping)
-            .logs(self.logs.iter().cloned());
+            .logs(self.logs.iter().cloned())
+            // No screening sample: a fit from these files does not diagnose.
+            .diagnose(false);
         if let Some(threads) = self.threads {
             job = job.threads(threads);
         }

@@ -59,7 +59,7 @@ impl std::fmt::Display for Axis {
 ///
 /// Every vector holds `len()` values. An optional signal is `None` when the data do not
 /// carry it, and otherwise holds `len()` values like the others.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SampleChunk {
     /// Time, s.
     pub t: Vec<f64>,

@@ -453,3 +453,118 @@ fn cross_validation_groups_leave_their_logs_out_together() {
         );
     }
 }
+
+/// The diagnosis from statistics (the second and third passes as data): parts of the
+/// first pass, a plan, one second-pass part per log made by a prepared plan (as a
+/// worker makes them, each sent as bytes), the reduce, the remainder parts, the finish:
+/// the report equals that of the same logs fitted and diagnosed directly, bit for bit
+/// (the same per-log statistics merged in the same order). Parts of another plan, a
+/// missing part and parts accumulated without the diagnosis are refused by name.
+#[test]
+fn the_diagnosis_from_statistics_equals_the_direct_fit() {
+    use mrsysid::{
+        Error, Identification, LogSource, PassPart, PassPlan, RemainderPart, StatsError, StatsPart,
+    };
+    let logs: Vec<PathBuf> = [(0, 900), (900, 1800), (1800, 2400), (2400, 3001)]
+        .iter()
+        .map(|&(a, b)| flight_part(&format!("passes-{a}.csv"), a..b))
+        .collect();
+    let vehicle =
+        Vehicle::from_toml_file(&root().join("data/vehicles/quad_x.toml")).expect("vehicle");
+    let builder = || Identification::new(vehicle.clone()).threads(2);
+    let direct = builder()
+        .logs(logs[..3].to_vec())
+        .validate(logs[3].clone())
+        .run()
+        .expect("direct fit");
+    assert!(
+        !direct
+            .outcome()
+            .diagnosis
+            .as_ref()
+            .expect("diagnosis")
+            .remainder
+            .is_empty(),
+        "the flight's pieces are time series: the remainder pass runs"
+    );
+    let part = |log: &PathBuf| builder().log(log.clone()).accumulate().expect("part");
+    let mut fit = part(&logs[0]);
+    for log in &logs[1..3] {
+        fit.merge(&part(log)).expect("merge");
+    }
+    let validation = part(&logs[3]);
+
+    // The driver's plan, sent to the workers as bytes.
+    let plan = builder().pass_plan(&fit, Some(&validation)).expect("plan");
+    let plan = PassPlan::from_bytes(&plan.to_bytes(), "plan").expect("plan bytes");
+    let worker = builder().prepare_pass(plan.clone()).expect("prepared");
+    let pass = |log: &PathBuf| {
+        let part = worker
+            .pass_part(&LogSource::from(log.clone()))
+            .expect("pass");
+        PassPart::from_bytes(&part.to_bytes(), "pass").expect("pass bytes")
+    };
+    // Any order: the reduce puts them in the plan's.
+    let passes: Vec<PassPart> = logs.iter().rev().map(pass).collect();
+    let pending = builder()
+        .diagnose_from_stats(&fit, Some(&validation), &passes)
+        .expect("diagnosis from statistics");
+    let (model, fit_logs) = pending.remainder_plan().expect("a remainder pass");
+    let (model, fit_logs) = (model.clone(), fit_logs.to_vec());
+    assert_eq!(fit_logs.len(), 3, "the fit logs only");
+    let remainders: Vec<RemainderPart> = (fit_logs.iter())
+        .map(|name| {
+            // The parts name each log by its file name.
+            let path = logs.iter().find(|p| p.ends_with(name)).expect("a fit log");
+            let part = worker.remainder_part(&model, &LogSource::from(path.clone()));
+            let bytes = part.expect("remainder").to_bytes();
+            RemainderPart::from_bytes(&bytes, "remainder").expect("remainder bytes")
+        })
+        .collect();
+    let from_stats = builder()
+        .finish_from_stats(pending, &remainders)
+        .expect("finish");
+    let json = |r: &mrsysid::Results| serde_json::to_string(&r.report()).expect("json");
+    assert_eq!(json(&from_stats), json(&direct));
+
+    // A pass of another plan (validation log left out), a missing pass, a missing
+    // remainder, parts without screening samples.
+    let other = builder().pass_plan(&fit, None).expect("other plan");
+    let other = builder().prepare_pass(other).expect("other prepared");
+    let mut mixed = passes.clone();
+    // passes[1] is logs[2]'s.
+    mixed[1] = (other.pass_part(&LogSource::from(logs[2].clone()))).expect("other pass");
+    let e = builder()
+        .diagnose_from_stats(&fit, Some(&validation), &mixed)
+        .expect_err("another plan");
+    assert!(
+        matches!(&e, Error::Stats(StatsError::OtherPlan { file }) if file.ends_with("passes-1800.csv")),
+        "{e}"
+    );
+    let e = builder()
+        .diagnose_from_stats(&fit, Some(&validation), &passes[1..])
+        .expect_err("missing");
+    assert!(
+        matches!(&e, Error::Stats(StatsError::MissingPass { .. })),
+        "{e}"
+    );
+    let pending = builder()
+        .diagnose_from_stats(&fit, Some(&validation), &passes)
+        .expect("again");
+    let Err(e) = builder().finish_from_stats(pending, &remainders[1..]) else {
+        panic!("a missing remainder part must be refused");
+    };
+    assert!(e.to_string().contains("no remainder part"), "{e}");
+    let unscreened = |log: &PathBuf| {
+        (builder().diagnose(false).log(log.clone()).accumulate()).expect("no screening")
+    };
+    let mut bare: StatsPart = unscreened(&logs[0]);
+    bare.merge(&unscreened(&logs[1])).expect("merge");
+    let e = builder()
+        .pass_plan(&bare, None)
+        .expect_err("not diagnosable");
+    assert!(
+        matches!(&e, Error::Stats(StatsError::NotDiagnosable { .. })),
+        "{e}"
+    );
+}

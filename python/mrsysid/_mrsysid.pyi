@@ -102,6 +102,7 @@ def accumulate(
     drop_invalid: bool,
     loads_low_pass: Optional[float],
     keep_ground: bool,
+    diagnose: bool,
 ) -> bytes:
     """The logs' first-pass statistics as the bytes of one statistics part."""
 
@@ -124,3 +125,67 @@ def fit_from_stats(
     groups: List[str],
 ) -> Results:
     """The Eq. 22 fit from statistics parts (no residual pass, no diagnosis)."""
+
+def pass_plan(
+    vehicle: Vehicle,
+    *,
+    parts: bytes,
+    validate_parts: Optional[bytes],
+    mapping: Optional[str],
+    threads: Optional[int],
+    inflow: str,
+    linear_vh: bool,
+    rotor_inertia: str,
+    drop_invalid: bool,
+    loads_low_pass: Optional[float],
+    keep_ground: bool,
+) -> bytes:
+    """The second-pass plan of the parts' logs, as bytes."""
+
+class PreparedPass:
+    """A second-pass plan prepared once per process for passing its logs."""
+
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        plan: bytes,
+        *,
+        mapping: Optional[str],
+        threads: Optional[int],
+        inflow: str,
+        linear_vh: bool,
+        rotor_inertia: str,
+        drop_invalid: bool,
+        loads_low_pass: Optional[float],
+        keep_ground: bool,
+    ) -> None: ...
+    def pass_log(self, path: str) -> bytes:
+        """The second pass of one of the plan's logs, as bytes."""
+    def remainder_log(self, model: bytes, path: str) -> bytes:
+        """The remainder pass of a fit log with the final model, as bytes."""
+
+class PendingFit:
+    """The fit and diagnosis from statistics, waiting for the remainder pass."""
+
+    def remainder_plan(self) -> Optional[Tuple[bytes, List[str]]]:
+        """(final model bytes, fit log names), or None when no remainder pass runs."""
+    def finish(self, parts: List[bytes]) -> Results:
+        """The results with one remainder part per fit log (once only)."""
+
+def diagnose_from_stats(
+    vehicle: Vehicle,
+    *,
+    parts: bytes,
+    validate_parts: Optional[bytes],
+    passes: List[bytes],
+    mapping: Optional[str],
+    threads: Optional[int],
+    inflow: str,
+    linear_vh: bool,
+    rotor_inertia: str,
+    drop_invalid: bool,
+    loads_low_pass: Optional[float],
+    keep_ground: bool,
+    groups: List[str],
+) -> PendingFit:
+    """The fit and diagnosis from first- and second-pass parts."""

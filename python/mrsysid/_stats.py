@@ -37,12 +37,16 @@ def accumulate(
     drop_invalid: bool = False,
     loads_low_pass: Optional[float] = None,
     keep_ground: bool = False,
+    diagnose: bool = False,
 ) -> bytes:
     """Reads logs once and returns their first-pass statistics as the bytes of one
     statistics part (about 35 kB a log for a quadrotor, whatever its length): the same
     bytes ``mrsysid accumulate`` writes. Parts merge with ``merge_stats`` and fit with
     ``fit_from_stats`` when made with the same vehicle, mapping and options (the
-    arguments mean what they mean for ``mrsysid.fit``). Errors raise the exceptions of
+    arguments mean what they mean for ``mrsysid.fit``). With ``diagnose=True`` a part
+    also keeps the log's thinned samples for the diagnosis's screening (up to 20 000
+    samples a log, a few hundred kB to a few MB), which a diagnosis from statistics
+    needs (``mrsysid.dask.fit_fleet``). Errors raise the exceptions of
     ``mrsysid.errors``."""
     log_paths = [os.fspath(logs)] if is_path(logs) else [os.fspath(p) for p in logs]
     return _mrsysid.accumulate(
@@ -59,6 +63,7 @@ def accumulate(
             loads_low_pass=loads_low_pass,
             keep_ground=keep_ground,
         ),
+        diagnose=diagnose,
     )
 
 

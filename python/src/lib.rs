@@ -9,6 +9,7 @@
 mod errors;
 mod fit;
 mod model;
+mod passes;
 mod results;
 mod stats;
 mod tables;
@@ -28,5 +29,9 @@ fn _mrsysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stats::accumulate, m)?)?;
     m.add_function(wrap_pyfunction!(stats::merge_stats, m)?)?;
     m.add_function(wrap_pyfunction!(stats::fit_from_stats, m)?)?;
+    m.add_function(wrap_pyfunction!(passes::pass_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(passes::diagnose_from_stats, m)?)?;
+    m.add_class::<passes::PreparedPass>()?;
+    m.add_class::<passes::PendingFit>()?;
     Ok(())
 }

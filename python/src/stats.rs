@@ -21,7 +21,7 @@ use crate::vehicle::Vehicle;
 #[pyfunction]
 #[pyo3(signature = (
     vehicle, *, logs, tables, mapping, threads, inflow, linear_vh, rotor_inertia,
-    drop_invalid, loads_low_pass, keep_ground
+    drop_invalid, loads_low_pass, keep_ground, diagnose
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn accumulate<'py>(
@@ -37,6 +37,7 @@ pub fn accumulate<'py>(
     drop_invalid: bool,
     loads_low_pass: Option<f64>,
     keep_ground: bool,
+    diagnose: bool,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let options = Options {
         mapping,
@@ -53,7 +54,7 @@ pub fn accumulate<'py>(
         wrench: true,
         time: true,
     };
-    let mut job = options.builder(py, &vehicle)?.logs(logs);
+    let mut job = options.builder(py, &vehicle)?.logs(logs).diagnose(diagnose);
     for (name, columns) in tables {
         job = job.log(memory_log(py, name, &columns, needs)?);
     }
@@ -65,7 +66,7 @@ pub fn accumulate<'py>(
 }
 
 /// Reads the part in `bytes` (named `name` in errors).
-fn part(py: Python<'_>, bytes: &[u8], name: &str) -> PyResult<StatsPart> {
+pub fn part(py: Python<'_>, bytes: &[u8], name: &str) -> PyResult<StatsPart> {
     StatsPart::from_bytes(bytes, name).map_err(|e| to_py(py, &e.into()))
 }
 

@@ -54,18 +54,33 @@ def split_sweep(tmp_path: Path, logs: int) -> list:
     return paths
 
 
+def split_flight(tmp_path: Path, logs: int) -> list:
+    """The shipped 30 s flight cut into `logs` contract CSVs of consecutive rows (each
+    a time series of its own)."""
+    lines = FLIGHT.read_text().splitlines()
+    header, rows = lines[0], lines[1:]
+    n = len(rows) // logs
+    paths = []
+    for k in range(logs):
+        path = tmp_path / f"flight-{k}.csv"
+        path.write_text("\n".join([header, *rows[k * n : (k + 1) * n]]) + "\n")
+        paths.append(path)
+    return paths
+
+
 def test_a_fleet_on_two_dask_workers_equals_the_single_process_fit(tmp_path: Path, quad_x) -> None:
     distributed = pytest.importorskip("distributed")
     from mrsysid.dask import fit_fleet
 
     logs = split_sweep(tmp_path, 50)
+    flights = split_flight(tmp_path, 4)
     corrupt = tmp_path / "corrupt.csv"
     corrupt.write_text("t,u,v\n0,1\n")
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as client:
         # Four "days" of ten logs each as cross-validation groups; the corrupt log's
-        # group goes with it.
+        # group goes with it. Both passes and the diagnosis run as map-reduce.
         days = [f"day{k // 10}" for k in range(40)]
         fleet = fit_fleet(
             [*logs[:40], corrupt],
@@ -74,18 +89,22 @@ def test_a_fleet_on_two_dask_workers_equals_the_single_process_fit(tmp_path: Pat
             client=client,
             groups=[*days, "day9"],
         )
+        eq22 = fit_fleet(logs[:40], QUAD_X, client=client, groups=days, diagnose=False)
+        # Time series: the remainder pass runs as a third map.
+        flight = fit_fleet(flights[:3], QUAD_X, validate=flights[3:], client=client)
     assert fleet.fitted == [str(p) for p in logs[:40]]
     assert list(fleet.failed) == [str(corrupt)]
     assert "corrupt.csv" in fleet.failed[str(corrupt)]
-    direct = mrsysid.fit(
-        quad_x,
-        logs[:40],
-        validate=logs[40:],
-        residual_pass=False,
-        diagnose=False,
-        groups=days,
-    )
+    direct = mrsysid.fit(quad_x, logs[:40], validate=logs[40:], groups=days)
     folds = [f["name"] for f in fleet.results.report()["cross_validation"]]
     assert folds == ["group day0", "group day1", "group day2", "group day3", "pooled"]
+    # Tolerance zero: the same statistics merged in the same order, the same decisions.
+    assert fleet.results.report() == direct.report()
+    assert direct.report()["diagnosis"]["effects_added"], "the sweep's drag is found"
     pd.testing.assert_frame_equal(fleet.results.parameters, direct.parameters, rtol=0, atol=0)
-    pd.testing.assert_frame_equal(fleet.results.metrics, direct.metrics, rtol=0, atol=0)
+    eq22_direct = mrsysid.fit(quad_x, logs[:40], residual_pass=False, diagnose=False, groups=days)
+    pd.testing.assert_frame_equal(eq22.results.parameters, eq22_direct.parameters, rtol=0, atol=0)
+    pd.testing.assert_frame_equal(eq22.results.metrics, eq22_direct.metrics, rtol=0, atol=0)
+    flight_direct = mrsysid.fit(quad_x, flights[:3], validate=flights[3:])
+    assert flight_direct.report()["diagnosis"]["remainder"], "a remainder pass ran"
+    assert flight.results.report() == flight_direct.report()

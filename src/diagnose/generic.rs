@@ -409,7 +409,7 @@ impl Screened {
 /// Keeps every `stride`-th sample of a stream, at most about `cap`: when the kept set
 /// outgrows `cap` every other kept sample is dropped and the stride doubles, so the
 /// sample stays evenly spread over the whole stream whatever its length.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Thinned {
     chunk: SampleChunk,
     cap: usize,

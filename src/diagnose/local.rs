@@ -143,7 +143,7 @@ fn activity_patterns(signals: &[&[f64]], thresholds: &[f64]) -> Vec<u64> {
 
 /// Statistics of the samples where local candidates act, one accumulator per activity
 /// pattern ([`LocalRegions::push`]); [`LocalRegions::per_region`] makes each region's.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct ActivityParts {
     /// (pattern, statistics), patterns ascending.
     parts: Vec<(u64, Accumulator)>,
@@ -160,6 +160,11 @@ impl ActivityParts {
             }
         };
         &mut self.parts[at].1
+    }
+
+    /// Its statistics, one per activity pattern.
+    pub fn accumulators(&self) -> impl Iterator<Item = &Accumulator> {
+        self.parts.iter().map(|(_, a)| a)
     }
 
     /// Merges `later`'s statistics (of other samples) pattern by pattern.

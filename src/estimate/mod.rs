@@ -26,7 +26,7 @@ pub mod remainder;
 use serde::Serialize;
 
 pub use crossval::{CrossValidation, Folds, cross_validate};
-pub use diagnostics::{DiagnosticOptions, ResidualDiagnostics, ResidualPass};
+pub use diagnostics::{DiagnosticOptions, ResidualDiagnostics, ResidualPass, ResidualSums};
 pub use fsoa::{Addition, FsoaStep, FsoaTable, fsoa, score_addition};
 pub use identifiability::{DroppedTerm, ProblemConditioning};
 pub use inference::{

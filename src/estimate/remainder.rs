@@ -29,7 +29,7 @@ const AXES: [(Axis, [&str; 2]); 3] = [
 ];
 
 /// Sums of one (residual, reference) pair at one lag.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 struct PairSums {
     n: f64,
     e: f64,
@@ -80,16 +80,20 @@ struct Row {
 }
 
 /// Streaming correlation sums of one log (or the merge of several): feed it the samples
-/// in time order with [`Remainder::push`].
-#[derive(Debug, Clone)]
+/// in time order with [`Remainder::push`]. Serialised, it carries its sums alone (what
+/// [`Remainder::merge`] adds), not the state of a log's pass.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Remainder {
     /// Lags in samples, one per [`REMAINDER_LAGS_MS`] (from the log's sample interval).
+    #[serde(skip)]
     lags: Vec<isize>,
     /// Nominal sample interval, s (the first interval seen until a log sets it).
+    #[serde(skip)]
     interval: Option<f64>,
     /// Sums per axis, reference and lag.
     sums: Vec<PairSums>,
     /// The last samples (time, row), as many as the longest lag.
+    #[serde(skip)]
     history: std::collections::VecDeque<(f64, Row)>,
 }
 
@@ -161,6 +165,11 @@ impl Remainder {
         while self.history.len() > longest {
             self.history.pop_front();
         }
+    }
+
+    /// True when its sums are laid out as this crate's (a deserialised one may not be).
+    pub fn has_layout(&self) -> bool {
+        self.sums.len() == AXES.len() * 2 * REMAINDER_LAGS_MS.len()
     }
 
     /// Adds the sums of another log's pass.

@@ -92,26 +92,43 @@ pub(super) struct LogCounts {
     pub(super) plan: Option<BlockPlan>,
 }
 
+/// What a first pass keeps beside the statistics.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Keep {
+    /// The thinned fit samples, for a diagnosis's screening.
+    pub(super) screening: bool,
+    /// A log file's parsed chunks, for a second pass in this process.
+    pub(super) spill: bool,
+}
+
+impl Keep {
+    /// What a fit of `req` in one process keeps.
+    pub(super) fn for_fit(req: &FitRequest) -> Self {
+        Self {
+            screening: req.diagnose.is_some(),
+            spill: req.second_pass || req.diagnose.is_some(),
+        }
+    }
+}
+
 /// Reads one log, routing each sample to the fit or validation statistics (a single fit
-/// log's to its time units); `share` is the number of threads the job may use (see
-/// [`stream_log`]).
+/// log's to its time units) and keeping what `keep` says; `share` is the number of
+/// threads the job may use (see [`stream_log`]).
 pub(super) fn read_log(
     source: &LogSource,
     role: Role,
     req: &FitRequest,
     share: usize,
+    keep: Keep,
 ) -> Result<LogStats, Error> {
     let mut fit = Accumulator::new(&req.structure);
     let mut held_out = Accumulator::new(&req.structure);
     let mut units = (role == Role::Blocks).then(Units::new);
     let mut signals = None;
     let mut screening = Thinned::new(SCREENING_SAMPLES);
-    let keep_screening = req.diagnose.is_some();
     let mut ws = Workspace::default();
     let mut spill = match source {
-        LogSource::File(_) if req.second_pass || req.diagnose.is_some() => {
-            Some(SpillWriter::create()?)
-        }
+        LogSource::File(_) if keep.spill => Some(SpillWriter::create()?),
         _ => None,
     };
     let mut chunks = 0;
@@ -124,7 +141,7 @@ pub(super) fn read_log(
         let pushed = if role.validates() {
             held_out.push(&req.structure, chunk, &mut ws)
         } else {
-            if keep_screening {
+            if keep.screening {
                 screening.push(chunk);
             }
             match units.as_mut() {

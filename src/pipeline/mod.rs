@@ -25,6 +25,7 @@ use crate::error::{Error, RequestError};
 use crate::estimate;
 use crate::io::Summary;
 use crate::progress::Phase;
+use crate::sample::Signals;
 use crate::source::LogSource;
 use crate::spill::Spill;
 use crate::stats::{AccumulateError, Accumulator};
@@ -33,9 +34,11 @@ mod blocks;
 mod feed;
 mod first_pass;
 mod folds;
+mod framing;
 mod log_checks;
 mod outcome;
 mod parts;
+mod pass_parts;
 mod pass_share;
 mod remainder;
 mod request;
@@ -46,11 +49,16 @@ mod stream;
 mod threads;
 
 pub use feed::stream_for_model;
+pub use framing::STATS_FORMAT_VERSION;
 pub use outcome::{EffectSeries, FitOutcome, PlotSeries};
-pub use parts::{STATS_FORMAT_VERSION, StatsPart, accumulate, run_from_parts};
+pub use parts::{StatsPart, accumulate, run_from_parts};
+pub use pass_parts::{
+    PassPart, PassPlan, PendingFit, PreparedPass, RemainderPart, RemainderPlan,
+    diagnose_from_parts, pass_plan,
+};
 pub use request::{FitRequest, Holdout};
 
-use first_pass::{LogCounts, LogStats, read_log};
+use first_pass::{Keep, LogCounts, LogStats, read_log};
 use folds::{arrange, merge};
 use log_checks::{time_unit_error, too_short};
 use outcome::validation_source;
@@ -84,7 +92,7 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
     let jobs = jobs(req);
     req.enter(Phase::Reading, first_pass_size(&jobs));
     let per_log = run_jobs(&jobs, req, |_, path, role, share| {
-        read_log(path, role, req, share)
+        read_log(path, role, req, share, Keep::for_fit(req))
     })?;
     after_first_pass(req, &jobs, per_log)
 }
@@ -95,8 +103,39 @@ pub fn run(req: &FitRequest) -> Result<FitOutcome, Error> {
 fn after_first_pass(
     req: &FitRequest,
     jobs: &[(LogSource, split::Role)],
-    mut per_log: Vec<LogStats>,
+    per_log: Vec<LogStats>,
 ) -> Result<FitOutcome, Error> {
+    let (mut outcome, first) = first_fit(req, per_log)?;
+    if req.second_pass || req.diagnose.is_some() {
+        second_pass(req, jobs, &first, &mut outcome)?;
+    }
+    Ok(outcome)
+}
+
+/// What the second pass needs of the first pass over the logs, in job order.
+pub(super) struct FirstPass {
+    /// Each log file's parsed chunks.
+    spills: Vec<Option<Spill>>,
+    counts: Vec<LogCounts>,
+    /// The optional signals of the first log with samples.
+    signals: Option<Signals>,
+    /// The thinned fit samples of all logs, merged in order.
+    screening: Thinned,
+}
+
+impl FirstPass {
+    /// True when every fit log of `req` is a time series.
+    fn fit_logs_time_series(&self, req: &FitRequest) -> bool {
+        self.counts[..req.logs.len()].iter().all(|c| c.time_series)
+    }
+}
+
+/// The checks that need the logs read (`per_log`, in job order), the Eq. 22
+/// fit, its cross-validation and validation figures; and what the second pass needs.
+fn first_fit(
+    req: &FitRequest,
+    mut per_log: Vec<LogStats>,
+) -> Result<(FitOutcome, FirstPass), Error> {
     time_unit_error(req, &per_log)?;
     let n_fit = req.logs.len();
     let mut validation_stats = Accumulator::new(&req.structure);
@@ -159,7 +198,7 @@ fn after_first_pass(
     if let [single] = &mut counts[..n_fit] {
         single.plan = plan;
     }
-    let mut outcome = FitOutcome {
+    let outcome = FitOutcome {
         fit,
         fit_stats,
         validation_stats,
@@ -174,16 +213,11 @@ fn after_first_pass(
         diagnosis: None,
         variance_inflation: 1.0,
     };
-    if req.second_pass || req.diagnose.is_some() {
-        second_pass(
-            req,
-            jobs,
-            &spills,
-            &counts,
-            signals,
-            screening.samples(),
-            &mut outcome,
-        )?;
-    }
-    Ok(outcome)
+    let first = FirstPass {
+        spills,
+        counts,
+        signals,
+        screening,
+    };
+    Ok((outcome, first))
 }

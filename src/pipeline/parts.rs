@@ -15,10 +15,11 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::first_pass::{LogStats, Runs, read_log};
+use super::first_pass::{Keep, LogStats, Runs, read_log};
+use super::framing::{self, fnv1a};
 use super::split::Role;
 use super::threads::run_jobs;
-use super::{FitOutcome, FitRequest, after_first_pass, check, first_pass_size};
+use super::{FitOutcome, FitRequest, check, first_fit, first_pass_size};
 use crate::diagnose::{SCREENING_SAMPLES, Thinned};
 use crate::error::{Error, StatsError};
 use crate::io::Summary;
@@ -27,16 +28,8 @@ use crate::sample::Signals;
 use crate::source::LogSource;
 use crate::stats::Accumulator;
 
-/// Version of the byte format written by [`StatsPart::to_bytes`]; a file of another
-/// version is refused.
-pub const STATS_FORMAT_VERSION: u32 = 1;
-
 /// First bytes of every statistics file.
 const MAGIC: &[u8; 16] = b"mrsysid-stats\r\n\x1a";
-
-/// Bytes before the payload: magic, version (u32), payload length (u64), CRC-32 of the
-/// payload (u32), all little-endian.
-const HEADER_BYTES: usize = 16 + 4 + 8 + 4;
 
 /// The first-pass statistics of one or more logs, made with one set of settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -58,12 +51,15 @@ struct LogPart {
     signals: Option<Signals>,
     chunks: usize,
     runs: Runs,
+    /// Its thinned fit samples for the diagnosis's screening; `None` when accumulated
+    /// with the diagnosis off.
+    screening: Option<Thinned>,
 }
 
 /// What the statistics of a log depend on, in words: the vehicle, the model structure,
 /// the mapping, the options that change the samples read and the consistent filter's
 /// cut-off. (Not the thread count or the CSV range size, which change nothing.)
-fn settings(req: &FitRequest) -> String {
+pub(super) fn settings(req: &FitRequest) -> String {
     let r = &req.read;
     format!(
         "vehicle {:?}; structure {:?}; mapping {:?}; invalid samples {:?}, max gap {:?} s, \
@@ -79,27 +75,25 @@ fn settings(req: &FitRequest) -> String {
     )
 }
 
-/// 64-bit FNV-1a of `bytes`: a stable hash (std's is not stable across releases).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
-}
-
 /// Reads every fit log of `req` (its validation logs are ignored) and keeps each one's
-/// first pass as a part, on `req.threads` threads; the logs are checked as
-/// [`crate::Identification::run`] checks them (a log given twice is refused).
+/// first pass as a part, on `req.threads` threads, with its screening sample when `req`
+/// diagnoses; the logs are checked as [`crate::Identification::run`] checks them (a log
+/// given twice is refused).
 pub fn accumulate(req: &FitRequest) -> Result<StatsPart, Error> {
+    // The diagnosis's derived signals (the slow thrusts) go into the screening sample.
+    let keep = Keep {
+        screening: req.diagnose.is_some(),
+        spill: false,
+    };
     let mut req = req.clone();
     req.validate.clear();
     req.second_pass = false;
-    req.diagnose = None;
     super::request::check_groups(&req)?;
     check(&req)?;
     let jobs: Vec<(LogSource, Role)> = req.logs.iter().map(|l| (l.clone(), Role::Fit)).collect();
     req.enter(Phase::Reading, first_pass_size(&jobs));
     let per_log = run_jobs(&jobs, &req, |_, source, role, share| {
-        read_log(source, role, &req, share)
+        read_log(source, role, &req, share, keep)
     })?;
     let settings = settings(&req);
     Ok(StatsPart {
@@ -113,6 +107,7 @@ pub fn accumulate(req: &FitRequest) -> Result<StatsPart, Error> {
                 signals: s.signals,
                 chunks: s.chunks,
                 runs: s.runs,
+                screening: keep.screening.then_some(s.screening),
             })
             .collect(),
     })
@@ -127,6 +122,30 @@ pub fn run_from_parts(
     fit: &StatsPart,
     validate: Option<&StatsPart>,
 ) -> Result<FitOutcome, Error> {
+    let logs = from_parts(req, fit, validate, false)?;
+    first_fit(&logs.req, logs.per_log).map(|(outcome, _)| outcome)
+}
+
+/// The logs of statistics parts as the pipeline holds them after their first pass.
+pub(super) struct PartLogs {
+    /// The request with the parts' logs (their names) as its fit and validation logs.
+    pub(super) req: FitRequest,
+    /// Each log and its role, fit logs first.
+    pub(super) jobs: Vec<(LogSource, Role)>,
+    /// Each log's first pass, in the order of `jobs`.
+    pub(super) per_log: Vec<LogStats>,
+}
+
+/// The logs of `fit` (at least two) and `validate` as the pipeline holds them after the
+/// first pass, for `req` (whose settings must be those the parts were made with), with
+/// the fit logs' screening samples when `screening` (refused for parts accumulated
+/// without).
+pub(super) fn from_parts(
+    req: &FitRequest,
+    fit: &StatsPart,
+    validate: Option<&StatsPart>,
+    screening: bool,
+) -> Result<PartLogs, Error> {
     let settings = settings(req);
     let fingerprint = fnv1a(settings.as_bytes());
     for part in std::iter::once(fit).chain(validate) {
@@ -153,12 +172,20 @@ pub fn run_from_parts(
         // The same log among fit and validation logs would be validated in-sample.
         all.merge(v)?;
     }
+    let unscreened: Vec<&str> = (fit.logs.iter())
+        .filter(|l| l.screening.is_none())
+        .map(|l| l.summary.file.as_str())
+        .collect();
+    if screening && !unscreened.is_empty() {
+        return Err(StatsError::NotDiagnosable {
+            logs: unscreened.join(", "),
+        }
+        .into());
+    }
     let source = |p: &LogPart| LogSource::File(p.summary.file.clone().into());
     let mut req = req.clone();
     req.logs = fit.logs.iter().map(source).collect();
     req.validate = validate.map_or_else(Vec::new, |v| v.logs.iter().map(source).collect());
-    req.second_pass = false;
-    req.diagnose = None;
     let jobs: Vec<(LogSource, Role)> = (req.logs.iter().map(|l| (l.clone(), Role::Fit)))
         .chain(req.validate.iter().map(|l| (l.clone(), Role::Validation)))
         .collect();
@@ -172,11 +199,13 @@ pub fn run_from_parts(
                 Role::Validation => (empty, log.stats),
                 _ => (log.stats, empty),
             };
+            // As in a fit of the logs themselves, only fit logs are screened.
+            let screening = log.screening.filter(|_| screening && !role.validates());
             LogStats {
                 fit,
                 held_out,
                 units: None,
-                screening: Thinned::new(SCREENING_SAMPLES),
+                screening: screening.unwrap_or_else(|| Thinned::new(SCREENING_SAMPLES)),
                 summary: log.summary,
                 signals: log.signals,
                 spill: None,
@@ -185,7 +214,7 @@ pub fn run_from_parts(
             }
         })
         .collect();
-    after_first_pass(&req, &jobs, per_log)
+    Ok(PartLogs { req, jobs, per_log })
 }
 
 impl StatsPart {
@@ -239,50 +268,13 @@ impl StatsPart {
     /// string, the format version, the payload's length and CRC-32, then the payload
     /// (postcard 1.0 encoding of the part).
     pub fn to_bytes(&self) -> Vec<u8> {
-        // Serialising plain data into a Vec cannot fail.
-        let payload = postcard::to_stdvec(self).unwrap_or_default();
-        let mut out = Vec::with_capacity(HEADER_BYTES + payload.len());
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&STATS_FORMAT_VERSION.to_le_bytes());
-        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
-        out.extend_from_slice(&payload);
-        out
+        framing::to_bytes(MAGIC, self)
     }
 
     /// Reads a part from `bytes` in the statistics byte format; `file` names it in
     /// errors.
     pub fn from_bytes(bytes: &[u8], file: &str) -> Result<Self, StatsError> {
-        let bad = |what: String| StatsError::Format {
-            file: file.to_string(),
-            what,
-        };
-        if bytes.len() < HEADER_BYTES || &bytes[..16] != MAGIC {
-            return Err(bad("not a mrsysid statistics file (bad magic bytes)".into()));
-        }
-        let word = |at: usize, n: usize| {
-            let mut b = [0u8; 8];
-            b[..n].copy_from_slice(&bytes[at..at + n]);
-            u64::from_le_bytes(b)
-        };
-        let version = word(16, 4);
-        if version != u64::from(STATS_FORMAT_VERSION) {
-            return Err(bad(format!(
-                "format version {version}, this mrsysid reads version {STATS_FORMAT_VERSION}"
-            )));
-        }
-        let (length, crc) = (word(20, 8), word(28, 4));
-        let payload = &bytes[HEADER_BYTES..];
-        if payload.len() as u64 != length {
-            return Err(bad(format!(
-                "truncated or padded: the header gives {length} payload bytes, the file has {}",
-                payload.len()
-            )));
-        }
-        if u64::from(crc32fast::hash(payload)) != crc {
-            return Err(bad("checksum mismatch: the file is corrupted".into()));
-        }
-        postcard::from_bytes(payload).map_err(|e| bad(format!("payload: {e}")))
+        framing::from_bytes(MAGIC, "statistics file", bytes, file)
     }
 
     /// Writes the part to `path` (whole or not at all).

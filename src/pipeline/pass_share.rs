@@ -30,11 +30,12 @@ pub(super) struct PassContext<'a> {
     /// An empty residual pass to start each log from.
     pub(super) residuals: ResidualPass,
     /// Candidate effects, when diagnosing.
-    pub(super) extended: Option<Extended>,
+    pub(super) extended: Option<&'a Extended>,
     /// The blocks of a single fit log.
     pub(super) plan: Option<&'a BlockPlan>,
-    /// Plot decimation: every `stride`-th sample of the whole run (fit, validation).
-    pub(super) strides: [u64; 2],
+    /// Plot decimation: every `stride`-th sample of the whole run (fit, validation);
+    /// `None` for no plot series.
+    pub(super) strides: Option<[u64; 2]>,
 }
 
 /// One log's share of the second pass. Shares merge in job order into the result of a

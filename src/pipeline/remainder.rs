@@ -9,7 +9,7 @@ use crate::diagnose::Diagnosis;
 use crate::error::Error;
 use crate::estimate::remainder::{AxisRemainder, Remainder};
 use crate::mixing::{Mixing, VirtualActuator, mix_row};
-use crate::model::Workspace;
+use crate::model::{ModelStructure, Workspace};
 use crate::sample::{Axis, SampleChunk};
 use crate::source::LogSource;
 use crate::spill::Spill;
@@ -28,34 +28,47 @@ pub(super) fn remainder(
     spills: &[Option<Spill>],
     diagnosis: &Diagnosis,
 ) -> Result<Vec<AxisRemainder>, Error> {
-    let mixing = Mixing::new(&req.vehicle);
+    let model = (&diagnosis.structure, diagnosis.theta.as_slice());
     let mut all = Remainder::default();
     for (i, (source, _)) in jobs.iter().enumerate().take(req.logs.len()) {
-        let mut log = LogRemainder {
-            diagnosis,
-            mixing: &mixing,
-            ws: Workspace::default(),
-            sums: Remainder::default(),
-            seen: 0,
-            scratch: Default::default(),
-        };
-        match &spills[i] {
-            Some(spill) => {
-                let chunks = spill.chunks().min(REMAINDER_SAMPLES.div_ceil(1024));
-                spill.stream_chunks(0..chunks, |c| log.push(c))?;
-            }
-            None => {
-                stream_log(source, req, 1, |c| log.push(c))?;
-            }
-        }
-        all.merge(&log.sums);
+        all.merge(&log_remainder(req, source, spills[i].as_ref(), model)?);
     }
     Ok(all.evidence())
 }
 
+/// One log's correlation sums for [`remainder`], of the final `model` (structure, θ̂):
+/// read from its `spill` when there is one.
+pub(super) fn log_remainder(
+    req: &FitRequest,
+    source: &LogSource,
+    spill: Option<&Spill>,
+    model: (&ModelStructure, &[f64]),
+) -> Result<Remainder, Error> {
+    let mixing = Mixing::new(&req.vehicle);
+    let mut log = LogRemainder {
+        model,
+        mixing: &mixing,
+        ws: Workspace::default(),
+        sums: Remainder::default(),
+        seen: 0,
+        scratch: Default::default(),
+    };
+    match spill {
+        Some(spill) => {
+            let chunks = spill.chunks().min(REMAINDER_SAMPLES.div_ceil(1024));
+            spill.stream_chunks(0..chunks, |c| log.push(c))?;
+        }
+        None => {
+            stream_log(source, req, 1, |c| log.push(c))?;
+        }
+    }
+    Ok(log.sums)
+}
+
 /// One log's pass.
 struct LogRemainder<'a> {
-    diagnosis: &'a Diagnosis,
+    /// The final model: its structure and θ̂.
+    model: (&'a ModelStructure, &'a [f64]),
     mixing: &'a Mixing,
     ws: Workspace,
     sums: Remainder,
@@ -77,8 +90,8 @@ impl LogRemainder<'_> {
             self.sums.start_log(dt);
         }
         self.seen += n;
-        let d = self.diagnosis;
-        let y = d.structure.predict_chunk(&d.theta, chunk, &mut self.ws)?;
+        let (structure, theta) = self.model;
+        let y = structure.predict_chunk(theta, chunk, &mut self.ws)?;
         let rows = [
             VirtualActuator::Aileron,
             VirtualActuator::Elevator,

@@ -4,7 +4,7 @@
 //! every candidate effect, which it hands to the diagnosis with the folds of the first
 //! pass.
 
-use super::first_pass::LogCounts;
+use super::FirstPass;
 use super::folds::{arrange, grouped, local_folds, merge};
 use super::pass_share::{Extended, LogPass, PassContext, Start};
 use super::remainder::remainder;
@@ -15,7 +15,7 @@ use super::stream::stream_log;
 use super::threads::{run_in_order, run_jobs, segments};
 use super::{FitOutcome, FitRequest, PlotSeries, accumulate_error};
 use crate::diagnose::{
-    CandidateContext, CandidateStatistics, DiagnoseOptions, candidate_set_on_threads,
+    CandidateContext, CandidateStatistics, DiagnoseOptions, Diagnosis, candidate_set_on_threads,
     diagnose_on_threads, hover_thrust_coefficient,
 };
 use crate::error::Error;
@@ -73,6 +73,25 @@ impl Extended {
     }
 }
 
+/// The candidate effects of a diagnosis of logs with the first-pass signals `signals`
+/// and screening sample `screening` from the Eq. 22 `fit` (`time_series`: every fit log
+/// is a time series); `None` without a diagnosis, or without samples to tell the
+/// signals.
+pub(super) fn extended(
+    req: &FitRequest,
+    fit: &Fit,
+    time_series: bool,
+    signals: Option<Signals>,
+    screening: &SampleChunk,
+) -> Result<Option<Extended>, Error> {
+    let (Some(options), Some(s)) = (&req.diagnose, signals) else {
+        return Ok(None);
+    };
+    // Time series, not a sweep's points: the slow thrusts have a slow part.
+    let slow = s.omega_squared_slow && time_series;
+    Extended::new(req, fit, s, slow, screening, options).map(Some)
+}
+
 /// Streams the data again (each log file from its spill, in job order with `jobs`):
 /// residual diagnostics of the fit samples, decimated series of both parts for plots,
 /// and the statistics of every candidate effect. Logs are passed on up to `req.threads`
@@ -81,32 +100,25 @@ impl Extended {
 pub(super) fn second_pass(
     req: &FitRequest,
     jobs: &[(LogSource, Role)],
-    spills: &[Option<Spill>],
-    counts: &[LogCounts],
-    signals: Option<Signals>,
-    screening: &SampleChunk,
+    first: &FirstPass,
     out: &mut FitOutcome,
 ) -> Result<(), Error> {
+    let counts = &first.counts;
     let stride = |n: u64| n.div_ceil(PLOT_POINTS).max(1);
     if req.diagnose.is_some() {
         req.enter(Phase::Screening, 0);
     }
-    let plan = counts.iter().find_map(|c| c.plan.as_ref());
+    let screening = first.screening.samples();
+    let time_series = first.fit_logs_time_series(req);
+    let extended = extended(req, &out.fit, time_series, first.signals, screening)?;
+    let theta = out.fit.mmr.theta.clone();
     let ctx = PassContext {
         req,
-        theta: &out.fit.mmr.theta,
+        theta: &theta,
         residuals: ResidualPass::new(&req.structure, &out.fit, DiagnosticOptions::default()),
-        extended: match (&req.diagnose, signals) {
-            (Some(options), Some(s)) => {
-                // Time series, not a sweep's points: the slow thrusts have a slow part.
-                let time_series = counts[..req.logs.len()].iter().all(|c| c.time_series);
-                let slow = s.omega_squared_slow && time_series;
-                Some(Extended::new(req, &out.fit, s, slow, screening, options)?)
-            }
-            _ => None,
-        },
-        plan,
-        strides: [0, 1].map(|k| stride(counts.iter().map(|c| c.kinds[k]).sum())),
+        extended: extended.as_ref(),
+        plan: counts.iter().find_map(|c| c.plan.as_ref()),
+        strides: Some([0, 1].map(|k| stride(counts.iter().map(|c| c.kinds[k]).sum()))),
     };
     req.enter(
         Phase::SecondPass,
@@ -129,12 +141,36 @@ pub(super) fn second_pass(
         };
         let log = Log {
             source: path,
-            spill: spills[i].as_ref(),
+            spill: first.spills[i].as_ref(),
             role,
             chunks: counts[i].chunks,
         };
         pass_log(&ctx, &log, threads, at)
     })?;
+    let Some(mut diagnosis) = reduce(&ctx, jobs, shares, out)? else {
+        return Ok(());
+    };
+    if time_series {
+        req.enter(Phase::Remainder, 0);
+        diagnosis.remainder = remainder(req, jobs, &first.spills, &diagnosis)?;
+    }
+    for series in [&mut out.fit_series, &mut out.validation_series] {
+        series.predict_final(&diagnosis).map_err(Error::from)?;
+    }
+    out.diagnosis = Some(diagnosis);
+    Ok(())
+}
+
+/// The shares of every log's second pass (`shares`, in the order of `jobs`) merged into
+/// `out` (residual diagnostics, plot series), and the diagnosis from their candidate
+/// statistics when `ctx` has candidates, without its remainder (a third pass).
+pub(super) fn reduce(
+    ctx: &PassContext,
+    jobs: &[(LogSource, Role)],
+    shares: Vec<LogPass>,
+    out: &mut FitOutcome,
+) -> Result<Option<Diagnosis>, Error> {
+    let req = ctx.req;
     let mut residuals: Option<ResidualPass> = None;
     let mut t_offset = [0.0f64; 2];
     for share in &shares {
@@ -150,14 +186,14 @@ pub(super) fn second_pass(
         );
     }
     let Some(residuals) = residuals else {
-        return Ok(());
+        return Ok(None);
     };
     let diagnostics = residuals.finish();
     let inflation = coloured_variance_inflation(&diagnostics);
     out.variance_inflation = inflation;
     out.diagnostics = Some(diagnostics);
     let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
-        return Ok(());
+        return Ok(None);
     };
     let mut local_parts = Vec::new();
     for (share, (source, _)) in shares.iter().zip(jobs).take(req.logs.len()) {
@@ -179,10 +215,10 @@ pub(super) fn second_pass(
         .collect();
     let n_fit = req.logs.len();
     if per_log.len() != jobs.len() {
-        return Ok(());
+        return Ok(None);
     }
     let parts: Vec<&[Accumulator]> = per_log[..n_fit].iter().map(Vec::as_slice).collect();
-    let (folds, fit) = arrange(req, &ext.structure, plan, &parts)?;
+    let (folds, fit) = arrange(req, &ext.structure, ctx.plan, &parts)?;
     let mut report = Accumulator::new(&ext.structure);
     for pieces in &per_log[n_fit..] {
         merge(&mut report, &pieces[0])?;
@@ -206,16 +242,9 @@ pub(super) fn second_pass(
         local: &local,
     };
     req.enter(Phase::Diagnosis, 0);
-    let mut diagnosis = diagnose_on_threads(&stats, &req.fit, &options, req.threads)?;
-    if counts[..n_fit].iter().all(|c| c.time_series) {
-        req.enter(Phase::Remainder, 0);
-        diagnosis.remainder = remainder(req, jobs, spills, &diagnosis)?;
-    }
-    for series in [&mut out.fit_series, &mut out.validation_series] {
-        series.predict_final(&diagnosis).map_err(Error::from)?;
-    }
-    out.diagnosis = Some(diagnosis);
-    Ok(())
+    diagnose_on_threads(&stats, &req.fit, &options, req.threads)
+        .map(Some)
+        .map_err(Error::from)
 }
 
 /// Appends a log's plot series after the logs before it on the plots' time axis
@@ -242,13 +271,13 @@ fn lay_end_to_end(
 }
 
 /// A log as its second pass reads it.
-struct Log<'a> {
-    source: &'a LogSource,
+pub(super) struct Log<'a> {
+    pub(super) source: &'a LogSource,
     /// Its parsed chunks, for a log file.
-    spill: Option<&'a Spill>,
-    role: Role,
+    pub(super) spill: Option<&'a Spill>,
+    pub(super) role: Role,
     /// Chunks it is read in (from the first pass).
-    chunks: usize,
+    pub(super) chunks: usize,
 }
 
 /// The second pass over one log, from its spill when there is one, in the segments
@@ -256,7 +285,12 @@ struct Log<'a> {
 /// threads when read from a spill) and the segments' shares are merged in order, so the
 /// result depends on the log alone, never on the thread count or on whether the log
 /// came from a file or from memory.
-fn pass_log(ctx: &PassContext, log: &Log, threads: usize, at: Start) -> Result<LogPass, Error> {
+pub(super) fn pass_log(
+    ctx: &PassContext,
+    log: &Log,
+    threads: usize,
+    at: Start,
+) -> Result<LogPass, Error> {
     let (source, role) = (log.source, log.role);
     let mut share = LogPass::empty(ctx, role);
     let mut append = |part: LogPass| share.append(part).map_err(accumulate_error(source));

@@ -156,7 +156,11 @@ impl SegmentState<'_> {
     /// predictions: only those samples are assembled (each regressor is a function of
     /// its own sample, so their values are those of the whole part).
     fn plot(&mut self, part: &SampleChunk, k: usize) -> Result<(), Error> {
-        let (ctx, stride) = (self.ctx, self.ctx.strides[k]);
+        let ctx = self.ctx;
+        let Some(strides) = ctx.strides else {
+            return Ok(());
+        };
+        let stride = strides[k];
         let seen = self.seen[k];
         let kept: Vec<usize> = (0..part.len())
             .filter(|&i| (seen + i as u64).is_multiple_of(stride))

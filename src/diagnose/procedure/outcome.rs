@@ -237,6 +237,10 @@ pub struct Diagnosis {
     /// Structure of the final model.
     #[serde(skip)]
     pub structure: ModelStructure,
+    /// The columns of the extended structure (base and candidate effects) that
+    /// `structure` keeps, ascending.
+    #[serde(skip)]
+    pub columns: Vec<usize>,
     /// The final model's estimation on all fit data (FSOA tables, MMR estimates with
     /// white-residual σ and covariance, fit metrics).
     #[serde(skip)]

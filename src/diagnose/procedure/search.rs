@@ -131,6 +131,7 @@ pub fn diagnose_on_threads(
         theta: fit.mmr.theta.clone(),
         std: current.std,
         structure: current.structure,
+        columns: current.columns,
         fit,
     })
 }

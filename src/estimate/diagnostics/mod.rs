@@ -28,11 +28,11 @@ mod math;
 mod residual_pass;
 mod scores;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::sample::Axis;
 
-pub use residual_pass::ResidualPass;
+pub use residual_pass::{ResidualPass, ResidualSums};
 
 /// Options of the residual pass.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -58,7 +58,7 @@ impl Default for DiagnosticOptions {
 }
 
 /// Histogram of one axis' residuals.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Histogram {
     /// Lower edge of the first bin, N or N m.
     pub lo: f64,

@@ -62,8 +62,22 @@ pub struct ResidualPass {
     sum: [f64; 6],
 }
 
+/// What a residual pass gathered from its samples, without what it was set up with from
+/// its fit: the part of a pass one process sends another ([`ResidualPass::sums`],
+/// [`ResidualPass::with_sums`]).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct ResidualSums {
+    count: u64,
+    lag_xx: Vec<f64>,
+    lag_vv: Vec<f64>,
+    head: Rows,
+    tail: Rows,
+    hist: Vec<Histogram>,
+    sum: [f64; 6],
+}
+
 /// Row-major rows of regressor column shapes (width q) and residuals (width 12).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 struct Rows {
     x: Vec<f64>,
     v: Vec<f64>,
@@ -139,6 +153,46 @@ impl ResidualPass {
             hist,
             sum: [0.0; 6],
         }
+    }
+
+    /// The sums gathered so far.
+    pub fn sums(&self) -> ResidualSums {
+        ResidualSums {
+            count: self.count,
+            lag_xx: self.lag_xx.clone(),
+            lag_vv: self.lag_vv.clone(),
+            head: self.head.clone(),
+            tail: self.tail.clone(),
+            hist: self.hist.clone(),
+            sum: self.sum,
+        }
+    }
+
+    /// This pass, as set up from its fit, holding `sums` gathered by a pass set up from
+    /// the same fit; `None` when `sums` are not laid out as this pass's (other
+    /// options, another model, or altered bytes).
+    pub fn with_sums(&self, sums: ResidualSums) -> Option<ResidualPass> {
+        let (q, l) = (self.q(), self.options.max_lag);
+        let rows_fit =
+            |r: &Rows| r.v.len().is_multiple_of(VW) && r.len() <= l && r.x.len() == r.len() * q;
+        let hist_fit = sums.hist.len() == self.hist.len()
+            && (sums.hist.iter().zip(&self.hist))
+                .all(|(a, b)| a.counts.len() == b.counts.len() && a.lo == b.lo && a.hi == b.hi);
+        let fits = sums.lag_xx.len() == self.lag_xx.len()
+            && sums.lag_vv.len() == self.lag_vv.len()
+            && rows_fit(&sums.head)
+            && rows_fit(&sums.tail)
+            && hist_fit;
+        fits.then(|| ResidualPass {
+            count: sums.count,
+            lag_xx: sums.lag_xx,
+            lag_vv: sums.lag_vv,
+            head: sums.head,
+            tail: sums.tail,
+            hist: sums.hist,
+            sum: sums.sum,
+            ..self.clone()
+        })
     }
 
     /// Folds in the next chunk of the stream (chunks must come in time order; use

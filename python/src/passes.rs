@@ -1,0 +1,255 @@
+//! The closing of the loop from statistics (the second and third passes as data): the
+//! plan of the second pass (`pass_plan`), a plan prepared once per worker process
+//! (`PreparedPass`: each log's second pass and remainder pass as bytes), the reduce
+//! (`diagnose_from_stats`) and the finish (`PendingFit.finish`). `mrsysid.dask`
+//! drives them; any engine can.
+
+use std::path::PathBuf;
+
+use mrsysid::{Identification, PassPart, PassPlan, RemainderPart, RemainderPlan, StatsError};
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+
+use crate::errors::to_py;
+use crate::fit::Options;
+use crate::results::Results;
+use crate::stats::part;
+use crate::vehicle::Vehicle;
+
+/// A library error as the Python exception it maps to.
+fn stats_err(py: Python<'_>, e: StatsError) -> PyErr {
+    to_py(py, &e.into())
+}
+
+/// The builder for `vehicle` and the shared options (`groups` for the reduce).
+#[allow(clippy::too_many_arguments)]
+fn builder(
+    py: Python<'_>,
+    vehicle: &Vehicle,
+    mapping: Option<PathBuf>,
+    threads: Option<usize>,
+    inflow: &str,
+    linear_vh: bool,
+    rotor_inertia: &str,
+    drop_invalid: bool,
+    loads_low_pass: Option<f64>,
+    keep_ground: bool,
+) -> PyResult<Identification> {
+    Options {
+        mapping,
+        threads,
+        inflow,
+        linear_vh,
+        rotor_inertia,
+        drop_invalid,
+        loads_low_pass,
+        keep_ground,
+    }
+    .builder(py, vehicle)
+}
+
+/// The second-pass plan of the logs of `parts` and `validate_parts` (see
+/// `mrsysid.pass_plan`), as bytes.
+#[pyfunction]
+#[pyo3(signature = (
+    vehicle, *, parts, validate_parts, mapping, threads, inflow, linear_vh, rotor_inertia,
+    drop_invalid, loads_low_pass, keep_ground
+))]
+#[allow(clippy::too_many_arguments)]
+pub fn pass_plan<'py>(
+    py: Python<'py>,
+    vehicle: PyRef<'py, Vehicle>,
+    parts: Vec<u8>,
+    validate_parts: Option<Vec<u8>>,
+    mapping: Option<PathBuf>,
+    threads: Option<usize>,
+    inflow: &str,
+    linear_vh: bool,
+    rotor_inertia: &str,
+    drop_invalid: bool,
+    loads_low_pass: Option<f64>,
+    keep_ground: bool,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let job = builder(
+        py,
+        &vehicle,
+        mapping,
+        threads,
+        inflow,
+        linear_vh,
+        rotor_inertia,
+        drop_invalid,
+        loads_low_pass,
+        keep_ground,
+    )?;
+    let fit = part(py, &parts, "parts")?;
+    let validate = (validate_parts.map(|b| part(py, &b, "validate_parts"))).transpose()?;
+    let plan = py.detach(|| job.pass_plan(&fit, validate.as_ref()));
+    let plan = plan.map_err(|e| to_py(py, &e))?;
+    Ok(PyBytes::new(py, &plan.to_bytes()))
+}
+
+/// A second-pass plan prepared for passing its logs: made once per worker process.
+#[pyclass(frozen, module = "mrsysid._mrsysid")]
+pub struct PreparedPass {
+    inner: mrsysid::PreparedPass,
+}
+
+#[pymethods]
+impl PreparedPass {
+    /// Prepares the plan in `plan` (bytes of `pass_plan`) for the vehicle and options it
+    /// was made with.
+    #[new]
+    #[pyo3(signature = (
+        vehicle, plan, *, mapping, threads, inflow, linear_vh, rotor_inertia, drop_invalid,
+        loads_low_pass, keep_ground
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        vehicle: PyRef<'_, Vehicle>,
+        plan: Vec<u8>,
+        mapping: Option<PathBuf>,
+        threads: Option<usize>,
+        inflow: &str,
+        linear_vh: bool,
+        rotor_inertia: &str,
+        drop_invalid: bool,
+        loads_low_pass: Option<f64>,
+        keep_ground: bool,
+    ) -> PyResult<Self> {
+        let job = builder(
+            py,
+            &vehicle,
+            mapping,
+            threads,
+            inflow,
+            linear_vh,
+            rotor_inertia,
+            drop_invalid,
+            loads_low_pass,
+            keep_ground,
+        )?;
+        let plan = PassPlan::from_bytes(&plan, "plan").map_err(|e| stats_err(py, e))?;
+        let inner = py.detach(|| job.prepare_pass(plan));
+        let inner = inner.map_err(|e| to_py(py, &e))?;
+        Ok(Self { inner })
+    }
+
+    /// The second pass of the log at `path` (one of the plan's logs), as bytes.
+    fn pass_log<'py>(&self, py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyBytes>> {
+        let part = py.detach(|| self.inner.pass_part(&path.into()));
+        let part = part.map_err(|e| to_py(py, &e))?;
+        Ok(PyBytes::new(py, &part.to_bytes()))
+    }
+
+    /// The remainder pass of the fit log at `path` with the final model in `model`
+    /// (bytes of `PendingFit.remainder_plan`), as bytes.
+    fn remainder_log<'py>(
+        &self,
+        py: Python<'py>,
+        model: Vec<u8>,
+        path: PathBuf,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let model =
+            RemainderPlan::from_bytes(&model, "remainder plan").map_err(|e| stats_err(py, e))?;
+        let part = py.detach(|| self.inner.remainder_part(&model, &path.into()));
+        let part = part.map_err(|e| to_py(py, &e))?;
+        Ok(PyBytes::new(py, &part.to_bytes()))
+    }
+}
+
+/// The fit and diagnosis from statistics, waiting for the remainder pass.
+#[pyclass(module = "mrsysid._mrsysid")]
+pub struct PendingFit {
+    job: Identification,
+    inner: Option<mrsysid::PendingFit>,
+}
+
+#[pymethods]
+impl PendingFit {
+    /// `(model bytes, fit log names)` for the remainder pass over each fit log, or
+    /// `None` when there is none (no diagnosis, or logs that are not time series).
+    fn remainder_plan<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<(Bound<'py, PyBytes>, Vec<String>)>> {
+        let pending = self.pending()?;
+        Ok(pending
+            .remainder_plan()
+            .map(|(plan, logs)| (PyBytes::new(py, &plan.to_bytes()), logs.to_vec())))
+    }
+
+    /// The results, with the remainder parts `parts` (bytes of
+    /// `PreparedPass.remainder_log`, one per fit log; none without a remainder plan).
+    /// Once only.
+    fn finish(&mut self, py: Python<'_>, parts: Vec<Vec<u8>>) -> PyResult<Results> {
+        let parts: Vec<RemainderPart> = (parts.iter().enumerate())
+            .map(|(k, b)| RemainderPart::from_bytes(b, &format!("remainder parts[{k}]")))
+            .collect::<Result<_, _>>()
+            .map_err(|e| stats_err(py, e))?;
+        self.pending()?;
+        let pending = self.inner.take().expect("checked above");
+        let results = py.detach(|| self.job.finish_from_stats(pending, &parts));
+        results.map(Results::new).map_err(|e| to_py(py, &e))
+    }
+}
+
+impl PendingFit {
+    fn pending(&self) -> PyResult<&mrsysid::PendingFit> {
+        self.inner.as_ref().ok_or_else(|| {
+            pyo3::exceptions::PyRuntimeError::new_err("PendingFit.finish was already called")
+        })
+    }
+}
+
+/// The fit and diagnosis of the logs of `parts` and `validate_parts` from their
+/// second-pass parts `passes` (see `mrsysid.diagnose_from_stats`).
+#[pyfunction]
+#[pyo3(signature = (
+    vehicle, *, parts, validate_parts, passes, mapping, threads, inflow, linear_vh,
+    rotor_inertia, drop_invalid, loads_low_pass, keep_ground, groups
+))]
+#[allow(clippy::too_many_arguments)]
+pub fn diagnose_from_stats(
+    py: Python<'_>,
+    vehicle: PyRef<'_, Vehicle>,
+    parts: Vec<u8>,
+    validate_parts: Option<Vec<u8>>,
+    passes: Vec<Vec<u8>>,
+    mapping: Option<PathBuf>,
+    threads: Option<usize>,
+    inflow: &str,
+    linear_vh: bool,
+    rotor_inertia: &str,
+    drop_invalid: bool,
+    loads_low_pass: Option<f64>,
+    keep_ground: bool,
+    groups: Vec<String>,
+) -> PyResult<PendingFit> {
+    let job = builder(
+        py,
+        &vehicle,
+        mapping,
+        threads,
+        inflow,
+        linear_vh,
+        rotor_inertia,
+        drop_invalid,
+        loads_low_pass,
+        keep_ground,
+    )?
+    .groups(groups);
+    let fit = part(py, &parts, "parts")?;
+    let validate = (validate_parts.map(|b| part(py, &b, "validate_parts"))).transpose()?;
+    let passes: Vec<PassPart> = (passes.iter().enumerate())
+        .map(|(k, b)| PassPart::from_bytes(b, &format!("passes[{k}]")))
+        .collect::<Result<_, _>>()
+        .map_err(|e| stats_err(py, e))?;
+    let pending = py.detach(|| job.diagnose_from_stats(&fit, validate.as_ref(), &passes));
+    let pending = pending.map_err(|e| to_py(py, &e))?;
+    Ok(PendingFit {
+        job,
+        inner: Some(pending),
+    })
+}
