@@ -127,6 +127,14 @@ pub enum StatsError {
         /// The part (its log).
         file: String,
     },
+    /// A log asked to be passed with a plan that does not name it.
+    #[error(
+        "{log} is not one of the plan's logs (plans name each log as its first-pass part does, by its file name)"
+    )]
+    NotInPlan {
+        /// The log.
+        log: String,
+    },
     /// A log of the fit without its second- or third-pass part.
     #[error("no {pass} part for {log}: every log of the fit needs one, made from this plan")]
     MissingPass {

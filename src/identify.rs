@@ -61,7 +61,7 @@ use crate::io::{IoError, Mapping, ReadOptions};
 use crate::loads_scan::LowPassScan;
 use crate::model::{ModelOptions, ModelStructure, ParamId, Workspace};
 use crate::pipeline::{
-    self, FitOutcome, FitRequest, Holdout, PassPart, PassPlan, PendingFit, PreparedPass,
+    self, FitOutcome, FitRequest, Holdout, PassPlan, PendingFit, PlannedFit, PreparedPass,
     RemainderPart, StatsPart,
 };
 use crate::progress::Progress;
@@ -307,15 +307,21 @@ impl Identification {
         }
     }
 
-    /// The plan of the second pass over the logs of `fit` (at least two) and `validate`,
-    /// parts made with the diagnosis on (the default): the first of the three steps of
-    /// the diagnosis from statistics (see [`Identification::diagnose_from_stats`]).
-    pub fn pass_plan(
+    /// The Eq. 22 fit of the logs of `fit` (at least two) and `validate` from their
+    /// parts, made with the diagnosis on (the default), and the plan of their second
+    /// pass: the driver's first step of the diagnosis from statistics. Each worker
+    /// prepares the plan ([`Identification::prepare_pass`]) and passes its logs
+    /// ([`PreparedPass::pass_part`]); [`PlannedFit::diagnose`] reduces those parts into
+    /// a [`PendingFit`] that waits for the remainder pass
+    /// ([`PendingFit::remainder_plan`], [`PreparedPass::remainder_part`]) before
+    /// [`Identification::finish_from_stats`]. The results equal
+    /// [`Identification::run`] of the same logs in the same order, less the plot series.
+    pub fn plan_from_stats(
         &self,
         fit: &StatsPart,
         validate: Option<&StatsPart>,
-    ) -> Result<PassPlan, Error> {
-        pipeline::pass_plan(&self.request, fit, validate)
+    ) -> Result<PlannedFit, Error> {
+        pipeline::plan_fit(&self.request, fit, validate)
     }
 
     /// `plan` prepared for passing its logs ([`PreparedPass::pass_part`]) and, after
@@ -323,21 +329,6 @@ impl Identification {
     /// process, as it fits Eq. 22 and builds the candidate effects.
     pub fn prepare_pass(&self, plan: PassPlan) -> Result<PreparedPass, Error> {
         PreparedPass::new(&self.request, plan)
-    }
-
-    /// The fit and diagnosis of the logs of `fit` and `validate` from their first-pass
-    /// parts and one second-pass part per log made from [`Identification::pass_plan`]
-    /// of the same parts. The result waits for the remainder pass
-    /// ([`PendingFit::remainder_plan`]) before [`Identification::finish_from_stats`]:
-    /// then it equals [`Identification::run`] of the same logs in the same order, less
-    /// the plot series.
-    pub fn diagnose_from_stats(
-        &self,
-        fit: &StatsPart,
-        validate: Option<&StatsPart>,
-        passes: &[PassPart],
-    ) -> Result<PendingFit, Error> {
-        pipeline::diagnose_from_parts(&self.request, fit, validate, passes)
     }
 
     /// The results of `pending` with the remainder parts `parts` (one per fit log of

@@ -95,8 +95,8 @@ pub use model::{
 };
 pub use on_logs::Validation;
 pub use pipeline::{
-    EffectSeries, FitOutcome, Holdout, PassPart, PassPlan, PendingFit, PlotSeries, PreparedPass,
-    RemainderPart, RemainderPlan, STATS_FORMAT_VERSION, StatsPart,
+    EffectSeries, FitOutcome, Holdout, PassPart, PassPlan, PendingFit, PlannedFit, PlotSeries,
+    PreparedPass, RemainderPart, RemainderPlan, STATS_FORMAT_VERSION, StatsPart,
 };
 pub use progress::{Phase, Progress};
 pub use report::summary::Report;

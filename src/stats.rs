@@ -91,6 +91,8 @@ pub struct Accumulator {
     /// columns [`Accumulator::push`] assembles).
     stored: Vec<bool>,
     /// Upper-triangular R over the shapes, q × q (q = distinct shapes), column-major.
+    /// Serialised as its upper triangle only.
+    #[serde(with = "upper_triangle")]
     r: Vec<f64>,
     count: u64,
     min: Vec<f64>,
@@ -107,6 +109,41 @@ pub struct Accumulator {
     measured: [(f64, f64); 6],
     /// Smallest and largest u, v, w, p, q, r.
     motion: [(f64, f64); 6],
+}
+
+/// The serialised form of a q × q column-major upper-triangular matrix: q, then the
+/// entries on and above the diagonal, column by column (half the bytes of the whole;
+/// the entries below the diagonal are zero).
+mod upper_triangle {
+    use serde::de::Error;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(r: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        let q = r.len().isqrt();
+        let packed: Vec<f64> = (0..q)
+            .flat_map(|j| &r[j * q..j * q + j + 1])
+            .copied()
+            .collect();
+        (q, packed).serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        let (q, packed) = <(usize, Vec<f64>)>::deserialize(d)?;
+        if q.checked_mul(q + 1).map(|n| n / 2) != Some(packed.len()) {
+            return Err(D::Error::custom(format!(
+                "a triangular factor of order {q} with {} entries",
+                packed.len()
+            )));
+        }
+        let mut r = vec![0.0; q * q];
+        let mut entries = packed.into_iter();
+        for j in 0..q {
+            for (dst, v) in r[j * q..j * q + j + 1].iter_mut().zip(&mut entries) {
+                *dst = v;
+            }
+        }
+        Ok(r)
+    }
 }
 
 /// Distinct regressor rows counted exactly; beyond this many the count saturates (more

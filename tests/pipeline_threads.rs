@@ -494,9 +494,10 @@ fn the_diagnosis_from_statistics_equals_the_direct_fit() {
     }
     let validation = part(&logs[3]);
 
-    // The driver's plan, sent to the workers as bytes.
-    let plan = builder().pass_plan(&fit, Some(&validation)).expect("plan");
-    let plan = PassPlan::from_bytes(&plan.to_bytes(), "plan").expect("plan bytes");
+    // The driver's fit and plan, the plan sent to the workers as bytes.
+    let planned = || builder().plan_from_stats(&fit, Some(&validation));
+    let plan = planned().expect("plan").plan().to_bytes();
+    let plan = PassPlan::from_bytes(&plan, "plan").expect("plan bytes");
     let worker = builder().prepare_pass(plan.clone()).expect("prepared");
     let pass = |log: &PathBuf| {
         let part = worker
@@ -506,9 +507,8 @@ fn the_diagnosis_from_statistics_equals_the_direct_fit() {
     };
     // Any order: the reduce puts them in the plan's.
     let passes: Vec<PassPart> = logs.iter().rev().map(pass).collect();
-    let pending = builder()
-        .diagnose_from_stats(&fit, Some(&validation), &passes)
-        .expect("diagnosis from statistics");
+    let pending =
+        (planned().expect("plan").diagnose(passes.clone())).expect("diagnosis from statistics");
     let (model, fit_logs) = pending.remainder_plan().expect("a remainder pass");
     let (model, fit_logs) = (model.clone(), fit_logs.to_vec());
     assert_eq!(fit_logs.len(), 3, "the fit logs only");
@@ -527,30 +527,34 @@ fn the_diagnosis_from_statistics_equals_the_direct_fit() {
     let json = |r: &mrsysid::Results| serde_json::to_string(&r.report()).expect("json");
     assert_eq!(json(&from_stats), json(&direct));
 
-    // A pass of another plan (validation log left out), a missing pass, a missing
-    // remainder, parts without screening samples.
-    let other = builder().pass_plan(&fit, None).expect("other plan");
-    let other = builder().prepare_pass(other).expect("other prepared");
+    // A log the plan does not name, a pass of another plan (validation log left out), a
+    // missing pass, a missing remainder, parts without screening samples.
+    let other = builder().plan_from_stats(&fit, None).expect("other plan");
+    let other = builder()
+        .prepare_pass(other.plan().clone())
+        .expect("other prepared");
+    let e = (other.pass_part(&LogSource::from(logs[3].clone()))).expect_err("not its log");
+    assert!(
+        matches!(&e, Error::Stats(StatsError::NotInPlan { log }) if log == "passes-2400.csv"),
+        "{e}"
+    );
     let mut mixed = passes.clone();
     // passes[1] is logs[2]'s.
     mixed[1] = (other.pass_part(&LogSource::from(logs[2].clone()))).expect("other pass");
-    let e = builder()
-        .diagnose_from_stats(&fit, Some(&validation), &mixed)
+    let e = planned()
+        .expect("plan")
+        .diagnose(mixed)
         .expect_err("another plan");
     assert!(
         matches!(&e, Error::Stats(StatsError::OtherPlan { file }) if file.ends_with("passes-1800.csv")),
         "{e}"
     );
-    let e = builder()
-        .diagnose_from_stats(&fit, Some(&validation), &passes[1..])
-        .expect_err("missing");
+    let e = (planned().expect("plan").diagnose(passes[1..].to_vec())).expect_err("missing");
     assert!(
         matches!(&e, Error::Stats(StatsError::MissingPass { .. })),
         "{e}"
     );
-    let pending = builder()
-        .diagnose_from_stats(&fit, Some(&validation), &passes)
-        .expect("again");
+    let pending = (planned().expect("plan").diagnose(passes)).expect("again");
     let Err(e) = builder().finish_from_stats(pending, &remainders[1..]) else {
         panic!("a missing remainder part must be refused");
     };
@@ -561,7 +565,7 @@ fn the_diagnosis_from_statistics_equals_the_direct_fit() {
     let mut bare: StatsPart = unscreened(&logs[0]);
     bare.merge(&unscreened(&logs[1])).expect("merge");
     let e = builder()
-        .pass_plan(&bare, None)
+        .plan_from_stats(&bare, None)
         .expect_err("not diagnosable");
     assert!(
         matches!(&e, Error::Stats(StatsError::NotDiagnosable { .. })),

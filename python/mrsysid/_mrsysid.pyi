@@ -126,21 +126,29 @@ def fit_from_stats(
 ) -> Results:
     """The Eq. 22 fit from statistics parts (no residual pass, no diagnosis)."""
 
-def pass_plan(
-    vehicle: Vehicle,
-    *,
-    parts: bytes,
-    validate_parts: Optional[bytes],
-    mapping: Optional[str],
-    threads: Optional[int],
-    inflow: str,
-    linear_vh: bool,
-    rotor_inertia: str,
-    drop_invalid: bool,
-    loads_low_pass: Optional[float],
-    keep_ground: bool,
-) -> bytes:
-    """The second-pass plan of the parts' logs, as bytes."""
+class PlannedFit:
+    """The Eq. 22 fit of the parts' logs and the plan of their second pass."""
+
+    def __init__(
+        self,
+        vehicle: Vehicle,
+        *,
+        parts: bytes,
+        validate_parts: Optional[bytes],
+        mapping: Optional[str],
+        threads: Optional[int],
+        inflow: str,
+        linear_vh: bool,
+        rotor_inertia: str,
+        drop_invalid: bool,
+        loads_low_pass: Optional[float],
+        keep_ground: bool,
+        groups: List[str],
+    ) -> None: ...
+    def plan(self) -> bytes:
+        """The plan's bytes, for PreparedPass on every worker."""
+    def diagnose(self, passes: List[bytes]) -> "PendingFit":
+        """The fit and diagnosis from one second-pass part per log (once only)."""
 
 class PreparedPass:
     """A second-pass plan prepared once per process for passing its logs."""
@@ -171,21 +179,3 @@ class PendingFit:
         """(final model bytes, fit log names), or None when no remainder pass runs."""
     def finish(self, parts: List[bytes]) -> Results:
         """The results with one remainder part per fit log (once only)."""
-
-def diagnose_from_stats(
-    vehicle: Vehicle,
-    *,
-    parts: bytes,
-    validate_parts: Optional[bytes],
-    passes: List[bytes],
-    mapping: Optional[str],
-    threads: Optional[int],
-    inflow: str,
-    linear_vh: bool,
-    rotor_inertia: str,
-    drop_invalid: bool,
-    loads_low_pass: Optional[float],
-    keep_ground: bool,
-    groups: List[str],
-) -> PendingFit:
-    """The fit and diagnosis from first- and second-pass parts."""

@@ -6,9 +6,9 @@ every worker), the diagnosis on the client, and the remainder pass of each fit l
 the final model. Dask is needed only here (``pip install "dask[distributed]"``); the
 core is engine-neutral, so Spark (``treeAggregate`` with ``merge_stats`` as both
 functions, then ``mapPartitions`` for the second and remainder passes) or Ray can drive
-the same functions: ``accumulate``, ``merge_stats``, ``_mrsysid.pass_plan``,
-``_mrsysid.PreparedPass`` (``pass_log``, ``remainder_log``),
-``_mrsysid.diagnose_from_stats`` and ``PendingFit.finish``.
+the same functions: ``accumulate``, ``merge_stats``, ``_mrsysid.PlannedFit`` (``plan``,
+``diagnose``), ``_mrsysid.PreparedPass`` (``pass_log``, ``remainder_log``) and
+``PendingFit.finish``.
 """
 
 from __future__ import annotations
@@ -170,13 +170,15 @@ def fit_fleet(
                 **fit_options,
             )
             return FleetResults(results=results, fitted=fitted, failed=failed)
-        plan = _mrsysid.pass_plan(
+        planned = _mrsysid.PlannedFit(
             native_vehicle,
             parts=fit_part,
             validate_parts=validate_part,
             threads=None,
+            groups=list(fleet_groups or ()),
             **options,
         )
+        plan = planned.plan()
         plan_future = client.scatter(plan, broadcast=True)
         logs = fitted + list(validate_parts)
         tasks = client.map(
@@ -190,15 +192,7 @@ def fit_fleet(
             fit_parts = {p: b for p, b in fit_parts.items() if p not in lost}
             validate_parts = {p: b for p, b in validate_parts.items() if p not in lost}
             continue
-        pending = _mrsysid.diagnose_from_stats(
-            native_vehicle,
-            parts=fit_part,
-            validate_parts=validate_part,
-            passes=[b for _, b, _ in outcomes],
-            threads=None,
-            groups=list(fleet_groups or ()),
-            **options,
-        )
+        pending = planned.diagnose([b for _, b, _ in outcomes])
         remainders: List[bytes] = []
         remainder_plan = pending.remainder_plan()
         if remainder_plan is not None:

@@ -29,8 +29,7 @@ fn _mrsysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stats::accumulate, m)?)?;
     m.add_function(wrap_pyfunction!(stats::merge_stats, m)?)?;
     m.add_function(wrap_pyfunction!(stats::fit_from_stats, m)?)?;
-    m.add_function(wrap_pyfunction!(passes::pass_plan, m)?)?;
-    m.add_function(wrap_pyfunction!(passes::diagnose_from_stats, m)?)?;
+    m.add_class::<passes::PlannedFit>()?;
     m.add_class::<passes::PreparedPass>()?;
     m.add_class::<passes::PendingFit>()?;
     Ok(())

@@ -1,8 +1,8 @@
 //! The closing of the loop from statistics (the second and third passes as data): the
-//! plan of the second pass (`pass_plan`), a plan prepared once per worker process
+//! driver's fit and plan (`PlannedFit`), the plan prepared once per worker process
 //! (`PreparedPass`: each log's second pass and remainder pass as bytes), the reduce
-//! (`diagnose_from_stats`) and the finish (`PendingFit.finish`). `mrsysid.dask`
-//! drives them; any engine can.
+//! (`PlannedFit.diagnose`) and the finish (`PendingFit.finish`). `mrsysid.dask` drives
+//! them; any engine can.
 
 use std::path::PathBuf;
 
@@ -48,45 +48,86 @@ fn builder(
     .builder(py, vehicle)
 }
 
-/// The second-pass plan of the logs of `parts` and `validate_parts` (see
-/// `mrsysid.pass_plan`), as bytes.
-#[pyfunction]
-#[pyo3(signature = (
-    vehicle, *, parts, validate_parts, mapping, threads, inflow, linear_vh, rotor_inertia,
-    drop_invalid, loads_low_pass, keep_ground
-))]
-#[allow(clippy::too_many_arguments)]
-pub fn pass_plan<'py>(
-    py: Python<'py>,
-    vehicle: PyRef<'py, Vehicle>,
-    parts: Vec<u8>,
-    validate_parts: Option<Vec<u8>>,
-    mapping: Option<PathBuf>,
-    threads: Option<usize>,
-    inflow: &str,
-    linear_vh: bool,
-    rotor_inertia: &str,
-    drop_invalid: bool,
-    loads_low_pass: Option<f64>,
-    keep_ground: bool,
-) -> PyResult<Bound<'py, PyBytes>> {
-    let job = builder(
-        py,
-        &vehicle,
-        mapping,
-        threads,
-        inflow,
-        linear_vh,
-        rotor_inertia,
-        drop_invalid,
-        loads_low_pass,
-        keep_ground,
-    )?;
-    let fit = part(py, &parts, "parts")?;
-    let validate = (validate_parts.map(|b| part(py, &b, "validate_parts"))).transpose()?;
-    let plan = py.detach(|| job.pass_plan(&fit, validate.as_ref()));
-    let plan = plan.map_err(|e| to_py(py, &e))?;
-    Ok(PyBytes::new(py, &plan.to_bytes()))
+/// The Eq. 22 fit of the logs of `parts` and `validate_parts` and the plan of their
+/// second pass (see `mrsysid.dask`): the driver's side of the diagnosis from statistics.
+#[pyclass(module = "mrsysid._mrsysid")]
+pub struct PlannedFit {
+    job: Identification,
+    inner: Option<mrsysid::PlannedFit>,
+    plan: Vec<u8>,
+}
+
+#[pymethods]
+impl PlannedFit {
+    /// Fits and plans.
+    #[new]
+    #[pyo3(signature = (
+        vehicle, *, parts, validate_parts, mapping, threads, inflow, linear_vh, rotor_inertia,
+        drop_invalid, loads_low_pass, keep_ground, groups
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        vehicle: PyRef<'_, Vehicle>,
+        parts: Vec<u8>,
+        validate_parts: Option<Vec<u8>>,
+        mapping: Option<PathBuf>,
+        threads: Option<usize>,
+        inflow: &str,
+        linear_vh: bool,
+        rotor_inertia: &str,
+        drop_invalid: bool,
+        loads_low_pass: Option<f64>,
+        keep_ground: bool,
+        groups: Vec<String>,
+    ) -> PyResult<Self> {
+        let job = builder(
+            py,
+            &vehicle,
+            mapping,
+            threads,
+            inflow,
+            linear_vh,
+            rotor_inertia,
+            drop_invalid,
+            loads_low_pass,
+            keep_ground,
+        )?
+        .groups(groups);
+        let fit = part(py, &parts, "parts")?;
+        let validate = (validate_parts.map(|b| part(py, &b, "validate_parts"))).transpose()?;
+        let planned = py.detach(|| job.plan_from_stats(&fit, validate.as_ref()));
+        let planned = planned.map_err(|e| to_py(py, &e))?;
+        let plan = planned.plan().to_bytes();
+        Ok(Self {
+            job,
+            inner: Some(planned),
+            plan,
+        })
+    }
+
+    /// The plan's bytes, for `PreparedPass` on every worker.
+    fn plan<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.plan)
+    }
+
+    /// The fit and diagnosis from the second-pass parts `passes` (bytes of
+    /// `PreparedPass.pass_log`, one per log). Once only.
+    fn diagnose(&mut self, py: Python<'_>, passes: Vec<Vec<u8>>) -> PyResult<PendingFit> {
+        let passes: Vec<PassPart> = (passes.iter().enumerate())
+            .map(|(k, b)| PassPart::from_bytes(b, &format!("passes[{k}]")))
+            .collect::<Result<_, _>>()
+            .map_err(|e| stats_err(py, e))?;
+        let planned = self.inner.take().ok_or_else(|| {
+            pyo3::exceptions::PyRuntimeError::new_err("PlannedFit.diagnose was already called")
+        })?;
+        let pending = py.detach(|| planned.diagnose(passes));
+        let pending = pending.map_err(|e| to_py(py, &e))?;
+        Ok(PendingFit {
+            job: self.job.clone(),
+            inner: Some(pending),
+        })
+    }
 }
 
 /// A second-pass plan prepared for passing its logs: made once per worker process.
@@ -201,55 +242,4 @@ impl PendingFit {
             pyo3::exceptions::PyRuntimeError::new_err("PendingFit.finish was already called")
         })
     }
-}
-
-/// The fit and diagnosis of the logs of `parts` and `validate_parts` from their
-/// second-pass parts `passes` (see `mrsysid.diagnose_from_stats`).
-#[pyfunction]
-#[pyo3(signature = (
-    vehicle, *, parts, validate_parts, passes, mapping, threads, inflow, linear_vh,
-    rotor_inertia, drop_invalid, loads_low_pass, keep_ground, groups
-))]
-#[allow(clippy::too_many_arguments)]
-pub fn diagnose_from_stats(
-    py: Python<'_>,
-    vehicle: PyRef<'_, Vehicle>,
-    parts: Vec<u8>,
-    validate_parts: Option<Vec<u8>>,
-    passes: Vec<Vec<u8>>,
-    mapping: Option<PathBuf>,
-    threads: Option<usize>,
-    inflow: &str,
-    linear_vh: bool,
-    rotor_inertia: &str,
-    drop_invalid: bool,
-    loads_low_pass: Option<f64>,
-    keep_ground: bool,
-    groups: Vec<String>,
-) -> PyResult<PendingFit> {
-    let job = builder(
-        py,
-        &vehicle,
-        mapping,
-        threads,
-        inflow,
-        linear_vh,
-        rotor_inertia,
-        drop_invalid,
-        loads_low_pass,
-        keep_ground,
-    )?
-    .groups(groups);
-    let fit = part(py, &parts, "parts")?;
-    let validate = (validate_parts.map(|b| part(py, &b, "validate_parts"))).transpose()?;
-    let passes: Vec<PassPart> = (passes.iter().enumerate())
-        .map(|(k, b)| PassPart::from_bytes(b, &format!("passes[{k}]")))
-        .collect::<Result<_, _>>()
-        .map_err(|e| stats_err(py, e))?;
-    let pending = py.detach(|| job.diagnose_from_stats(&fit, validate.as_ref(), &passes));
-    let pending = pending.map_err(|e| to_py(py, &e))?;
-    Ok(PendingFit {
-        job,
-        inner: Some(pending),
-    })
 }

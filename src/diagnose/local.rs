@@ -162,9 +162,15 @@ impl ActivityParts {
         &mut self.parts[at].1
     }
 
-    /// Its statistics, one per activity pattern.
-    pub fn accumulators(&self) -> impl Iterator<Item = &Accumulator> {
-        self.parts.iter().map(|(_, a)| a)
+    /// The parts whose [`LocalRegions::per_region`] is `regions` (each region's
+    /// statistics, in region order), unchanged to the bit: each non-empty region's
+    /// statistics as the one pattern of that region alone.
+    pub fn from_regions(regions: Vec<Accumulator>) -> Self {
+        let parts = (regions.into_iter().enumerate())
+            .filter(|(_, a)| a.count() > 0)
+            .map(|(k, a)| (1u64 << k, a))
+            .collect();
+        Self { parts }
     }
 
     /// Merges `later`'s statistics (of other samples) pattern by pattern.

@@ -53,8 +53,8 @@ pub use framing::STATS_FORMAT_VERSION;
 pub use outcome::{EffectSeries, FitOutcome, PlotSeries};
 pub use parts::{StatsPart, accumulate, run_from_parts};
 pub use pass_parts::{
-    PassPart, PassPlan, PendingFit, PreparedPass, RemainderPart, RemainderPlan,
-    diagnose_from_parts, pass_plan,
+    PassPart, PassPlan, PendingFit, PlannedFit, PreparedPass, RemainderPart, RemainderPlan,
+    plan_fit,
 };
 pub use request::{FitRequest, Holdout};
 

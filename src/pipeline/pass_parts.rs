@@ -1,13 +1,14 @@
 //! Statistics as data, second and third passes (issue 43): the closing of the loop as
 //! map-reduce over logs that are read on other machines.
 //!
-//! 1. The driver turns the merged first-pass parts into a [`PassPlan`] ([`pass_plan`]):
-//!    what every log's second pass needs from all logs' first passes (the Eq. 22 fit's
-//!    statistics, the merged screening sample, the signals, each log's chunk count).
+//! 1. The driver fits Eq. 22 on the merged first-pass parts and plans the second pass
+//!    ([`plan_fit`]): the [`PassPlan`] holds what every log's second pass needs from all
+//!    logs' first passes (the Eq. 22 fit's statistics, the merged screening sample, the
+//!    signals, each log's chunk count).
 //! 2. Each task prepares the plan once ([`PreparedPass::new`]: the Eq. 22 fit and the
 //!    candidate effects, rebuilt exactly as the driver builds them) and passes its log
 //!    into a [`PassPart`]: the log's residual sums and candidate statistics.
-//! 3. The driver reduces the parts ([`diagnose_from_parts`]): residual diagnostics and
+//! 3. The driver reduces the parts ([`PlannedFit::diagnose`]): residual diagnostics and
 //!    the diagnosis, as one process would make them. Its [`PendingFit`] gives the
 //!    [`RemainderPlan`] (the final model), which each task passes its fit log with
 //!    ([`PreparedPass::remainder_part`]); [`PendingFit::finish`] merges those.
@@ -21,7 +22,6 @@
 use serde::{Deserialize, Serialize};
 
 use super::FitRequest;
-use super::first_fit;
 use super::framing::{self, fnv1a};
 use super::outcome::FitOutcome;
 use super::parts::{StatsPart, from_parts, settings};
@@ -29,6 +29,7 @@ use super::pass_share::{Extended, LogPass, PassContext, Start};
 use super::remainder::log_remainder;
 use super::second_pass::{Log, extended, pass_log, reduce};
 use super::split::Role;
+use super::{accumulate_error, first_fit};
 use crate::diagnose::Diagnosis;
 use crate::diagnose::local::ActivityParts;
 use crate::error::{Error, StatsError};
@@ -82,7 +83,9 @@ pub struct PassPart {
     /// First and last sample time of each kind (fit, validation), s.
     span: [(f64, f64); 2],
     candidates: Option<Vec<Option<Accumulator>>>,
-    local: Vec<ActivityParts>,
+    /// Where local candidates act: each region's statistics (the log's one local group
+    /// of a fit log; none for a validation log).
+    local: Vec<Vec<Accumulator>>,
 }
 
 /// The final model of a diagnosis, for the remainder pass over each fit log.
@@ -115,6 +118,16 @@ pub struct PreparedPass {
     residuals: ResidualPass,
 }
 
+/// The driver's state between the plan and the reduce: the Eq. 22 fit of the parts'
+/// logs and the plan of their second pass ([`plan_fit`]).
+#[derive(Debug)]
+pub struct PlannedFit {
+    /// The request with the parts' logs as its logs.
+    req: FitRequest,
+    plan: PassPlan,
+    outcome: FitOutcome,
+}
+
 /// The fit and diagnosis from second-pass parts, waiting for the remainder pass.
 #[derive(Debug)]
 pub struct PendingFit {
@@ -144,12 +157,14 @@ fn same_plan(plan: u64, digest: u64, log: &str) -> Result<(), StatsError> {
     }
 }
 
-/// The first fit of the parts' logs and the plan of their second pass.
-fn plan_and_outcome(
+/// The Eq. 22 fit of the logs of `fit` (at least two) and `validate` from their parts,
+/// made with `req`'s settings and with the diagnosis on when `req` diagnoses, and the
+/// plan of their second pass: the driver's first step.
+pub fn plan_fit(
     req: &FitRequest,
     fit: &StatsPart,
     validate: Option<&StatsPart>,
-) -> Result<(PassPlan, FitOutcome, FitRequest), Error> {
+) -> Result<PlannedFit, Error> {
     let logs = from_parts(req, fit, validate, req.diagnose.is_some())?;
     let (outcome, first) = first_fit(&logs.req, logs.per_log)?;
     let settings = plan_settings(req);
@@ -168,17 +183,11 @@ fn plan_and_outcome(
             })
             .collect(),
     };
-    Ok((plan, outcome, logs.req))
-}
-
-/// The second-pass plan of the logs of `fit` (at least two) and `validate`, parts made
-/// with `req`'s settings and with the diagnosis on when `req` diagnoses.
-pub fn pass_plan(
-    req: &FitRequest,
-    fit: &StatsPart,
-    validate: Option<&StatsPart>,
-) -> Result<PassPlan, Error> {
-    plan_and_outcome(req, fit, validate).map(|(plan, _, _)| plan)
+    Ok(PlannedFit {
+        req: logs.req,
+        plan,
+        outcome,
+    })
 }
 
 impl PreparedPass {
@@ -241,13 +250,7 @@ impl PreparedPass {
     fn entry(&self, log: &LogSource) -> Result<&PlanLog, Error> {
         let name = log.name();
         let entry = self.plan.logs.iter().find(|l| l.name == name);
-        entry.ok_or_else(|| {
-            StatsError::MissingPass {
-                log: name,
-                pass: "plan entry (the log is not one of the plan's logs)".into(),
-            }
-            .into()
-        })
+        entry.ok_or_else(|| StatsError::NotInPlan { log: name }.into())
     }
 
     /// The second pass over `log`, one of the plan's logs (named as its first-pass part
@@ -270,13 +273,22 @@ impl PreparedPass {
             in_log: [0; 2],
         };
         let share = pass_log(&ctx, &pass, self.req.threads, start)?;
+        // Each region's statistics, as the reduce makes them (fewer bytes to send than
+        // one accumulator per activity pattern).
+        let local = match &self.extended {
+            Some(ext) => (share.local.iter())
+                .map(|g| ext.regions.per_region(g, &ext.structure))
+                .collect::<Result<_, _>>()
+                .map_err(accumulate_error(log))?,
+            None => Vec::new(),
+        };
         Ok(PassPart {
             plan: self.digest,
             log: entry.name.clone(),
             residuals: share.residuals.sums(),
             span: share.span,
             candidates: share.candidates,
-            local: share.local,
+            local,
         })
     }
 
@@ -316,75 +328,84 @@ impl PreparedPass {
     }
 }
 
-/// The fit and diagnosis of the logs of `fit` and `validate` from their first-pass
-/// parts and the second-pass parts `passes` (one per log, any order) made from their
-/// plan ([`pass_plan`] with the same arguments).
-pub fn diagnose_from_parts(
-    req: &FitRequest,
-    fit: &StatsPart,
-    validate: Option<&StatsPart>,
-    passes: &[PassPart],
-) -> Result<PendingFit, Error> {
-    let (plan, mut outcome, logs_req) = plan_and_outcome(req, fit, validate)?;
-    let prepared = PreparedPass::new(req, plan)?;
-    let mut ctx = prepared.context();
-    ctx.req = &logs_req;
-    let empty = prepared
-        .extended
-        .as_ref()
-        .map(|e| Accumulator::new(&e.structure));
-    let mut shares = Vec::with_capacity(prepared.plan.logs.len());
-    let mut jobs = Vec::with_capacity(prepared.plan.logs.len());
-    for entry in &prepared.plan.logs {
-        let part = passes.iter().find(|p| p.log == entry.name);
-        let part = part.ok_or_else(|| StatsError::MissingPass {
-            log: entry.name.clone(),
-            pass: "second-pass".into(),
-        })?;
-        same_plan(part.plan, prepared.digest, &part.log)?;
-        shares.push(share_of(&ctx, part, entry, empty.as_ref())?);
-        let role = match entry.validation {
-            true => Role::Validation,
-            false => Role::Fit,
-        };
-        jobs.push((LogSource::File(entry.name.clone().into()), role));
+impl PlannedFit {
+    /// The plan of the second pass, for [`PreparedPass::new`] on every worker.
+    pub fn plan(&self) -> &PassPlan {
+        &self.plan
     }
-    let diagnosis = reduce(&ctx, &jobs, shares, &mut outcome)?;
-    let fit_logs = (prepared.plan.logs.iter())
-        .filter(|l| !l.validation)
-        .map(|l| l.name.clone())
-        .collect();
-    let remainder = match &diagnosis {
-        Some(d) if prepared.plan.time_series => Some((
-            RemainderPlan {
-                plan: prepared.digest,
-                columns: d.columns.clone(),
-                theta: d.theta.clone(),
-            },
-            fit_logs,
-        )),
-        _ => None,
-    };
-    Ok(PendingFit {
-        outcome,
-        diagnosis,
-        remainder,
-    })
+
+    /// The fit and diagnosis of the logs from their second-pass parts `passes` (one per
+    /// log, any order; more are ignored) made from [`PlannedFit::plan`].
+    pub fn diagnose(self, passes: Vec<PassPart>) -> Result<PendingFit, Error> {
+        let PlannedFit {
+            req,
+            plan,
+            mut outcome,
+        } = self;
+        let prepared = PreparedPass::new(&req, plan)?;
+        let ctx = prepared.context();
+        let empty = prepared
+            .extended
+            .as_ref()
+            .map(|e| Accumulator::new(&e.structure));
+        let mut passes: Vec<Option<PassPart>> = passes.into_iter().map(Some).collect();
+        let mut shares = Vec::with_capacity(prepared.plan.logs.len());
+        let mut jobs = Vec::with_capacity(prepared.plan.logs.len());
+        for entry in &prepared.plan.logs {
+            let part = passes
+                .iter_mut()
+                .find(|p| p.as_ref().is_some_and(|p| p.log == entry.name))
+                .and_then(Option::take);
+            let part = part.ok_or_else(|| StatsError::MissingPass {
+                log: entry.name.clone(),
+                pass: "second-pass".into(),
+            })?;
+            same_plan(part.plan, prepared.digest, &part.log)?;
+            shares.push(share_of(&ctx, part, entry, empty.as_ref())?);
+            let role = match entry.validation {
+                true => Role::Validation,
+                false => Role::Fit,
+            };
+            jobs.push((LogSource::File(entry.name.clone().into()), role));
+        }
+        let diagnosis = reduce(&ctx, &jobs, shares, &mut outcome)?;
+        let fit_logs = (prepared.plan.logs.iter())
+            .filter(|l| !l.validation)
+            .map(|l| l.name.clone())
+            .collect();
+        let remainder = match &diagnosis {
+            Some(d) if prepared.plan.time_series => Some((
+                RemainderPlan {
+                    plan: prepared.digest,
+                    columns: d.columns.clone(),
+                    theta: d.theta.clone(),
+                },
+                fit_logs,
+            )),
+            _ => None,
+        };
+        Ok(PendingFit {
+            outcome,
+            diagnosis,
+            remainder,
+        })
+    }
 }
 
 /// `part` as the share of its log's second pass (`entry`), checked against `ctx`'s
 /// layout (`empty`: an empty accumulator of the candidate effects).
 fn share_of(
     ctx: &PassContext,
-    part: &PassPart,
+    part: PassPart,
     entry: &PlanLog,
     empty: Option<&Accumulator>,
 ) -> Result<LogPass, Error> {
+    let log = part.log;
     let altered = || StatsError::Format {
-        file: part.log.clone(),
+        file: log.clone(),
         what: "second-pass statistics not laid out for this plan: the part was altered".into(),
     };
-    let residuals = ctx.residuals.with_sums(part.residuals.clone());
+    let residuals = ctx.residuals.with_sums(part.residuals);
     let residuals = residuals.ok_or_else(altered)?;
     let laid_out = |a: &Accumulator| empty.is_some_and(|e| a.has_layout_of(e));
     let candidates_fit = match (&part.candidates, empty) {
@@ -393,8 +414,9 @@ fn share_of(
         _ => false,
     };
     let groups = usize::from(!entry.validation && empty.is_some());
-    let local_fit =
-        part.local.len() == groups && (part.local.iter()).all(|l| l.accumulators().all(laid_out));
+    let regions = ctx.extended.map_or(0, |e| e.regions.len());
+    let local_fit = part.local.len() == groups
+        && (part.local.iter()).all(|l| l.len() == regions && l.iter().all(laid_out));
     if !candidates_fit || !local_fit {
         return Err(altered().into());
     }
@@ -402,8 +424,12 @@ fn share_of(
         residuals,
         series: Default::default(),
         span: part.span,
-        candidates: part.candidates.clone(),
-        local: part.local.clone(),
+        candidates: part.candidates,
+        local: part
+            .local
+            .into_iter()
+            .map(ActivityParts::from_regions)
+            .collect(),
     })
 }
 
