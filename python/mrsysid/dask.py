@@ -157,10 +157,10 @@ def fit_fleet(
         if not fit_parts:
             raise ValueError(f"no log of the fleet could be read: {failed}")
         fitted = list(fit_parts)
-        fit_part = merge_stats(list(fit_parts.values()))
-        validate_part = merge_stats(list(validate_parts.values())) if validate_parts else None
         fleet_groups = [group_of[p] for p in fitted] if groups else None
         if not diagnose:
+            fit_part = merge_stats(list(fit_parts.values()))
+            validate_part = merge_stats(list(validate_parts.values())) if validate_parts else None
             results = fit_from_stats(
                 native_vehicle,
                 fit_part,
@@ -170,10 +170,11 @@ def fit_fleet(
                 **fit_options,
             )
             return FleetResults(results=results, fitted=fitted, failed=failed)
+        # The parts merged inside (one parse of them, no merged bytes made).
         planned = _mrsysid.PlannedFit(
             native_vehicle,
-            parts=fit_part,
-            validate_parts=validate_part,
+            parts=list(fit_parts.values()),
+            validate_parts=list(validate_parts.values()),
             threads=None,
             groups=list(fleet_groups or ()),
             **options,

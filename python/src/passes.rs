@@ -6,7 +6,9 @@
 
 use std::path::PathBuf;
 
-use mrsysid::{Identification, PassPart, PassPlan, RemainderPart, RemainderPlan, StatsError};
+use mrsysid::{
+    Identification, PassPart, PassPlan, RemainderPart, RemainderPlan, StatsError, StatsPart,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
@@ -59,7 +61,8 @@ pub struct PlannedFit {
 
 #[pymethods]
 impl PlannedFit {
-    /// Fits and plans.
+    /// Fits the logs of the first-pass parts `parts` (merged in order) and plans their
+    /// second pass, with validation figures on those of `validate_parts`.
     #[new]
     #[pyo3(signature = (
         vehicle, *, parts, validate_parts, mapping, threads, inflow, linear_vh, rotor_inertia,
@@ -69,8 +72,8 @@ impl PlannedFit {
     fn new(
         py: Python<'_>,
         vehicle: PyRef<'_, Vehicle>,
-        parts: Vec<u8>,
-        validate_parts: Option<Vec<u8>>,
+        parts: Vec<Vec<u8>>,
+        validate_parts: Vec<Vec<u8>>,
         mapping: Option<PathBuf>,
         threads: Option<usize>,
         inflow: &str,
@@ -94,8 +97,9 @@ impl PlannedFit {
             keep_ground,
         )?
         .groups(groups);
-        let fit = part(py, &parts, "parts")?;
-        let validate = (validate_parts.map(|b| part(py, &b, "validate_parts"))).transpose()?;
+        let fit = merged(py, &parts, "parts")?
+            .ok_or_else(|| pyo3::exceptions::PyValueError::new_err("PlannedFit: no part to fit"))?;
+        let validate = merged(py, &validate_parts, "validate_parts")?;
         let planned = py.detach(|| job.plan_from_stats(&fit, validate.as_ref()));
         let planned = planned.map_err(|e| to_py(py, &e))?;
         let plan = planned.plan().to_bytes();
@@ -128,6 +132,19 @@ impl PlannedFit {
             inner: Some(pending),
         })
     }
+}
+
+/// The parts in `parts` (named `name[k]` in errors) merged in order; `None` for none.
+fn merged(py: Python<'_>, parts: &[Vec<u8>], name: &str) -> PyResult<Option<StatsPart>> {
+    let mut all: Option<StatsPart> = None;
+    for (k, bytes) in parts.iter().enumerate() {
+        let p = part(py, bytes, &format!("{name}[{k}]"))?;
+        match all.as_mut() {
+            Some(a) => a.merge(&p).map_err(|e| stats_err(py, e))?,
+            None => all = Some(p),
+        }
+    }
+    Ok(all)
 }
 
 /// A second-pass plan prepared for passing its logs: made once per worker process.
