@@ -135,6 +135,8 @@ pub fn fit_outputs(cmd: &FitArgs) -> Vec<(&'static str, PathBuf)> {
     let mut out = Vec::new();
     out.extend(cmd.json.iter().map(|p| ("--json", p.clone())));
     out.extend(cmd.model_out.iter().map(|p| ("--model-out", p.clone())));
+    out.extend(cmd.plan_out.iter().map(|p| ("--plan-out", p.clone())));
+    out.extend((cmd.remainder_plan_out.iter()).map(|p| ("--remainder-plan-out", p.clone())));
     if let Some(dir) = &cmd.plots {
         out.push(("--plots", dir.clone()));
         for stem in PLOT_STEMS {
@@ -208,7 +210,15 @@ pub fn check_fit_outputs(
     let outputs: Vec<(&str, &Path)> = outputs.iter().map(|(o, p)| (*o, p.as_path())).collect();
     let logs = cmd.logs.iter().map(|p| (kinds.0, p.as_path()));
     let validate = cmd.validate.iter().map(|p| (kinds.1, p.as_path()));
-    check_outputs(&outputs, &model_inputs(&cmd.model, logs.chain(validate)))
+    let passes = (cmd.passes.iter().map(|p| ("pass file", p.as_path()))).chain(
+        cmd.remainders
+            .iter()
+            .map(|p| ("remainder file", p.as_path())),
+    );
+    check_outputs(
+        &outputs,
+        &model_inputs(&cmd.model, logs.chain(validate).chain(passes)),
+    )
 }
 
 /// Writes the JSON report (`--json`) and the identified model (`--model-out`) of a fit.

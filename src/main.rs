@@ -37,6 +37,10 @@ enum Command {
     /// `fit --from-stats` (statistics as data: one task per log or group of logs, on any
     /// machine or engine, then one fit).
     Accumulate(AccumulateArgs),
+    /// Pass a log again for a diagnosis from statistics: its second pass with a plan
+    /// written by `fit --from-stats --plan-out`, or with `--model` its remainder pass
+    /// (docs/stats-format.md).
+    Pass(PassArgs),
     /// Predict force and moment per sample of a log with a saved model (CSV out).
     Predict(PredictArgs),
     /// NRMSE, TIC and R² of a saved model on logs it was not fitted to.
@@ -154,9 +158,25 @@ struct FitArgs {
     /// The logs (and `--validate` logs) are statistics files written by `mrsysid
     /// accumulate` with the same vehicle, mapping and options: the Eq. 22 fit with
     /// leave-one-log-out cross-validation runs on them without reading any log (no
-    /// residual pass, no diagnosis, no plots: they need the samples).
+    /// plots; the residual pass and the diagnosis with --plan-out and --passes).
     #[arg(long)]
     from_stats: bool,
+    /// With --from-stats: fit Eq. 22, write the plan of the logs' second pass here and
+    /// stop (each log is then passed with `mrsysid pass LOG --plan FILE`).
+    #[arg(long, value_name = "FILE", requires = "from_stats")]
+    plan_out: Option<PathBuf>,
+    /// With --from-stats: the logs' second-pass files (`mrsysid pass`, one per fit and
+    /// validation log, any order): the residual pass and the diagnosis run on them.
+    #[arg(long, num_args = 1.., value_name = "FILES", requires = "from_stats")]
+    passes: Vec<PathBuf>,
+    /// With --passes, when the fit logs are time series: write the final model here for
+    /// the remainder pass of each fit log (`mrsysid pass LOG --plan P --model FILE`) and
+    /// stop; run again with --remainders.
+    #[arg(long, value_name = "FILE", requires = "passes")]
+    remainder_plan_out: Option<PathBuf>,
+    /// With --passes: the fit logs' remainder-pass files (one per fit log).
+    #[arg(long, num_args = 1.., value_name = "FILES", requires = "passes")]
+    remainders: Vec<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -173,6 +193,37 @@ struct AccumulateArgs {
     #[arg(long, value_parser = parse_threads)]
     threads: Option<usize>,
     /// The statistics file to write (whole or not at all).
+    #[arg(long, short)]
+    out: PathBuf,
+    /// Keep each log's thinned samples too (up to 20 000 a log), which a diagnosis from
+    /// statistics needs (`fit --from-stats --plan-out`, `--passes`).
+    #[arg(long)]
+    for_diagnosis: bool,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(clap::Args)]
+struct PassArgs {
+    /// The log to pass (as `accumulate` read it: the same file name).
+    log: PathBuf,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// The logs' loads were low-passed at this cut-off (Hz): as `fit --loads-low-pass`.
+    #[arg(long, value_name = "HZ")]
+    loads_low_pass: Option<f64>,
+    /// The second-pass plan, written by `fit --from-stats --plan-out`.
+    #[arg(long)]
+    plan: PathBuf,
+    /// The final model, written by `fit --from-stats --passes … --remainder-plan-out`:
+    /// pass the (fit) log for the remainder of the final model instead.
+    #[arg(long = "model", value_name = "FILE")]
+    final_model: Option<PathBuf>,
+    /// Threads for reading the log, at least 1 (default: available cores).
+    #[arg(long, value_parser = parse_threads)]
+    threads: Option<usize>,
+    /// The pass file to write (whole or not at all).
     #[arg(long, short)]
     out: PathBuf,
     /// Print nothing but errors.
@@ -344,6 +395,7 @@ fn main() -> ExitCode {
         Command::Fit(args) => commands::fit(&args, false),
         Command::Diagnose(args) => commands::fit(&args, true),
         Command::Accumulate(args) => stats_commands::accumulate(&args),
+        Command::Pass(args) => stats_commands::pass(&args),
         Command::Predict(args) => {
             commands::predict(&args.model, &args.log, args.mapping.as_deref(), &args.out)
         }
@@ -426,8 +478,22 @@ impl AccumulateArgs {
             .model
             .identification(vehicle, mapping)
             .logs(self.logs.iter().cloned())
-            // No screening sample: a fit from these files does not diagnose.
-            .diagnose(false);
+            // The screening sample only for a diagnosis from these files.
+            .diagnose(self.for_diagnosis);
+        if let Some(threads) = self.threads {
+            job = job.threads(threads);
+        }
+        if let Some(hz) = self.loads_low_pass {
+            job = job.loads_low_pass(hz);
+        }
+        job
+    }
+}
+
+impl PassArgs {
+    /// The builder the plan is prepared with.
+    fn identification(&self, vehicle: Vehicle, mapping: Option<Mapping>) -> Identification {
+        let mut job = self.model.identification(vehicle, mapping);
         if let Some(threads) = self.threads {
             job = job.threads(threads);
         }

@@ -1297,3 +1297,110 @@ fn a_data_driven_dynamics_csv_fits_as_the_contract_file() {
         );
     }
 }
+
+/// The diagnosis from statistics on the command line, as an engine that runs commands
+/// would drive it: `accumulate --for-diagnosis` per log, `fit --from-stats --plan-out`,
+/// `pass` per log, `fit --from-stats --passes --remainder-plan-out` (the flight pieces
+/// are time series: their remainder pass is asked for), `pass --model` per fit log, and
+/// `fit --from-stats --passes --remainders`: the JSON report equals the direct fit's of
+/// the same logs, every field (the same statistics merged in the same order).
+#[test]
+fn the_diagnosis_from_statistics_files_reports_what_the_direct_fit_reports() {
+    let v = ["--vehicle", "data/vehicles/quad_x.toml"];
+    let text = std::fs::read_to_string(root().join("data/quad_x_flight_quadratic_drag.csv"))
+        .expect("shipped flight");
+    let (header, rows) = text.split_once('\n').expect("header");
+    let rows: Vec<&str> = rows.lines().collect();
+    let logs: Vec<String> = (0..4)
+        .map(|k| {
+            let path = tmp(&format!("passes-piece-{k}.csv"));
+            let piece = &rows[k * rows.len() / 4..(k + 1) * rows.len() / 4];
+            std::fs::write(&path, format!("{header}\n{}\n", piece.join("\n"))).unwrap();
+            path.to_str().unwrap().to_string()
+        })
+        .collect();
+    let file = |name: &str| tmp(name).to_str().unwrap().to_string();
+    let run = |args: &[&str]| {
+        let out = mrsysid(&[args, &v[..], &["--quiet"]].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        (out.status.code(), stderr)
+    };
+    let ok = |args: &[&str]| {
+        let (code, stderr) = run(args);
+        assert_eq!(code, Some(0), "{args:?}: {stderr}");
+    };
+    let direct = file("passes-direct.json");
+    ok(&[
+        "fit",
+        &logs[0],
+        &logs[1],
+        &logs[2],
+        "--validate",
+        &logs[3],
+        "--json",
+        &direct,
+    ]);
+    let parts: Vec<String> = (0..4).map(|k| file(&format!("piece-{k}.stats"))).collect();
+    for (log, part) in logs.iter().zip(&parts) {
+        ok(&["accumulate", log, "--for-diagnosis", "-o", part]);
+    }
+    let from_stats = ["fit", "--from-stats", &parts[0], &parts[1], &parts[2]];
+    let from_stats = [&from_stats[..], &["--validate", &parts[3]]].concat();
+    let plan = file("pieces.plan");
+    ok(&[&from_stats[..], &["--plan-out", &plan]].concat());
+    let passes: Vec<String> = (0..4).map(|k| file(&format!("piece-{k}.pass"))).collect();
+    for (log, pass) in logs.iter().zip(&passes) {
+        ok(&["pass", log, "--plan", &plan, "-o", pass]);
+    }
+    let with_passes = [
+        &from_stats[..],
+        &["--passes"],
+        &passes.iter().map(String::as_str).collect::<Vec<_>>()[..],
+    ]
+    .concat();
+    let (code, stderr) = run(&with_passes);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--remainder-plan-out"), "{stderr}");
+    let model = file("pieces.model");
+    ok(&[&with_passes[..], &["--remainder-plan-out", &model]].concat());
+    let remainders: Vec<String> = (0..3).map(|k| file(&format!("piece-{k}.rem"))).collect();
+    for (log, rem) in logs.iter().zip(&remainders) {
+        ok(&["pass", log, "--plan", &plan, "--model", &model, "-o", rem]);
+    }
+    let stats = file("passes-from-stats.json");
+    let rems: Vec<&str> = remainders.iter().map(String::as_str).collect();
+    ok(&[
+        &with_passes[..],
+        &["--remainders"],
+        &rems[..],
+        &["--json", &stats],
+    ]
+    .concat());
+    assert_eq!(json(Path::new(&stats)), json(Path::new(&direct)));
+    // A pass file of another plan is refused by name.
+    let other_plan = file("other.plan");
+    ok(&[
+        "fit",
+        "--from-stats",
+        &parts[0],
+        &parts[1],
+        &parts[2],
+        "--plan-out",
+        &other_plan,
+    ]);
+    ok(&[
+        "pass",
+        &logs[0],
+        "--plan",
+        &other_plan,
+        "-o",
+        &file("other.pass"),
+    ]);
+    let mut mixed = with_passes.clone();
+    let at = mixed.iter().position(|a| *a == passes[0]).unwrap();
+    let other_pass = file("other.pass");
+    mixed[at] = &other_pass;
+    let (code, stderr) = run(&mixed);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("made from another plan"), "{stderr}");
+}

@@ -75,3 +75,19 @@ pub(super) fn fnv1a(bytes: &[u8]) -> u64 {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
     })
 }
+
+/// Writes `bytes` to `path` (whole or not at all).
+pub(super) fn save(path: &std::path::Path, bytes: &[u8]) -> Result<(), StatsError> {
+    crate::util::write_atomically(path, bytes).map_err(|e| StatsError::Io {
+        file: path.display().to_string(),
+        what: e.to_string(),
+    })
+}
+
+/// The bytes of the file at `path`.
+pub(super) fn load(path: &std::path::Path) -> Result<Vec<u8>, StatsError> {
+    std::fs::read(path).map_err(|e| StatsError::Io {
+        file: path.display().to_string(),
+        what: e.to_string(),
+    })
+}

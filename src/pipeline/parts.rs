@@ -279,18 +279,11 @@ impl StatsPart {
 
     /// Writes the part to `path` (whole or not at all).
     pub fn save(&self, path: &std::path::Path) -> Result<(), StatsError> {
-        crate::util::write_atomically(path, &self.to_bytes()).map_err(|e| StatsError::Io {
-            file: path.display().to_string(),
-            what: e.to_string(),
-        })
+        framing::save(path, &self.to_bytes())
     }
 
     /// Reads a part written by [`StatsPart::save`].
     pub fn load(path: &std::path::Path) -> Result<Self, StatsError> {
-        let bytes = std::fs::read(path).map_err(|e| StatsError::Io {
-            file: path.display().to_string(),
-            what: e.to_string(),
-        })?;
-        Self::from_bytes(&bytes, &path.display().to_string())
+        Self::from_bytes(&framing::load(path)?, &path.display().to_string())
     }
 }

@@ -491,6 +491,16 @@ macro_rules! framed {
             pub fn from_bytes(bytes: &[u8], file: &str) -> Result<Self, StatsError> {
                 framing::from_bytes($magic, $what, bytes, file)
             }
+
+            #[doc = concat!("Writes the ", $what, " to `path` (whole or not at all).")]
+            pub fn save(&self, path: &std::path::Path) -> Result<(), StatsError> {
+                framing::save(path, &self.to_bytes())
+            }
+
+            #[doc = concat!("Reads a ", $what, " written by `save`.")]
+            pub fn load(path: &std::path::Path) -> Result<Self, StatsError> {
+                Self::from_bytes(&framing::load(path)?, &path.display().to_string())
+            }
         }
     };
 }
