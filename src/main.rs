@@ -474,34 +474,37 @@ impl ModelArgs {
 impl AccumulateArgs {
     /// The builder of the logs' first passes.
     fn identification(&self, vehicle: Vehicle, mapping: Option<Mapping>) -> Identification {
-        let mut job = self
+        let job = self
             .model
             .identification(vehicle, mapping)
             .logs(self.logs.iter().cloned())
             // The screening sample only for a diagnosis from these files.
             .diagnose(self.for_diagnosis);
-        if let Some(threads) = self.threads {
-            job = job.threads(threads);
-        }
-        if let Some(hz) = self.loads_low_pass {
-            job = job.loads_low_pass(hz);
-        }
-        job
+        with_threads_and_low_pass(job, self.threads, self.loads_low_pass)
     }
 }
 
 impl PassArgs {
     /// The builder the plan is prepared with.
     fn identification(&self, vehicle: Vehicle, mapping: Option<Mapping>) -> Identification {
-        let mut job = self.model.identification(vehicle, mapping);
-        if let Some(threads) = self.threads {
-            job = job.threads(threads);
-        }
-        if let Some(hz) = self.loads_low_pass {
-            job = job.loads_low_pass(hz);
-        }
-        job
+        let job = self.model.identification(vehicle, mapping);
+        with_threads_and_low_pass(job, self.threads, self.loads_low_pass)
     }
+}
+
+/// `job` with `--threads` and `--loads-low-pass HZ` when given.
+fn with_threads_and_low_pass(
+    mut job: Identification,
+    threads: Option<usize>,
+    loads_low_pass: Option<f64>,
+) -> Identification {
+    if let Some(threads) = threads {
+        job = job.threads(threads);
+    }
+    if let Some(hz) = loads_low_pass {
+        job = job.loads_low_pass(hz);
+    }
+    job
 }
 
 impl FitArgs {

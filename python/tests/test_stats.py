@@ -41,28 +41,15 @@ def test_fleet_groups_name_every_log(tmp_path: Path) -> None:
         fit_fleet([SWEEP, FLIGHT], QUAD_X, client=object(), groups=["day1"])
 
 
-def split_sweep(tmp_path: Path, logs: int) -> list:
-    """The shipped 2000-point sweep cut into `logs` contract CSVs of equal length."""
-    lines = SWEEP.read_text().splitlines()
+def split(tmp_path: Path, shipped: Path, logs: int) -> list:
+    """The shipped log `shipped` cut into `logs` contract CSVs of consecutive rows, of
+    equal length (pieces of the flight are time series of their own)."""
+    lines = shipped.read_text().splitlines()
     header, rows = lines[0], lines[1:]
     n = len(rows) // logs
     paths = []
     for k in range(logs):
-        path = tmp_path / f"sweep-{k:02d}.csv"
-        path.write_text("\n".join([header, *rows[k * n : (k + 1) * n]]) + "\n")
-        paths.append(path)
-    return paths
-
-
-def split_flight(tmp_path: Path, logs: int) -> list:
-    """The shipped 30 s flight cut into `logs` contract CSVs of consecutive rows (each
-    a time series of its own)."""
-    lines = FLIGHT.read_text().splitlines()
-    header, rows = lines[0], lines[1:]
-    n = len(rows) // logs
-    paths = []
-    for k in range(logs):
-        path = tmp_path / f"flight-{k}.csv"
+        path = tmp_path / f"{shipped.stem}-{k:02d}.csv"
         path.write_text("\n".join([header, *rows[k * n : (k + 1) * n]]) + "\n")
         paths.append(path)
     return paths
@@ -72,8 +59,8 @@ def test_a_fleet_on_two_dask_workers_equals_the_single_process_fit(tmp_path: Pat
     distributed = pytest.importorskip("distributed")
     from mrsysid.dask import fit_fleet
 
-    logs = split_sweep(tmp_path, 50)
-    flights = split_flight(tmp_path, 4)
+    logs = split(tmp_path, SWEEP, 50)
+    flights = split(tmp_path, FLIGHT, 4)
     corrupt = tmp_path / "corrupt.csv"
     corrupt.write_text("t,u,v\n0,1\n")
     with distributed.LocalCluster(
