@@ -95,3 +95,33 @@ def test_a_fleet_on_two_dask_workers_equals_the_single_process_fit(tmp_path: Pat
     flight_direct = mrsysid.fit(quad_x, flights[:3], validate=flights[3:])
     assert flight_direct.report()["diagnosis"]["remainder"], "a remainder pass ran"
     assert flight.results.report() == flight_direct.report()
+
+
+def test_a_log_lost_after_its_first_pass_is_left_out_and_the_fleet_fitted_again(
+    tmp_path: Path, quad_x, monkeypatch
+) -> None:
+    # A log whose second pass fails (e.g. removed after its first pass) is reported and
+    # the fleet is planned and fitted again without it: the result is the fit of the
+    # other logs. In-process workers, so the patched task is the one they run.
+    distributed = pytest.importorskip("distributed")
+    import mrsysid.dask as fleet_module
+
+    logs = split(tmp_path, SWEEP, 6)
+    lost = str(logs[2])
+    real_pass = fleet_module._pass_one
+
+    def flaky_pass(path, *args, **kwargs):
+        if path == lost:
+            return path, None, f"{path}: removed after its first pass"
+        return real_pass(path, *args, **kwargs)
+
+    monkeypatch.setattr(fleet_module, "_pass_one", flaky_pass)
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as client:
+        fleet = fleet_module.fit_fleet(logs, QUAD_X, client=client)
+    assert list(fleet.failed) == [lost]
+    assert "removed after its first pass" in fleet.failed[lost]
+    kept = [p for p in logs if str(p) != lost]
+    assert fleet.fitted == [str(p) for p in kept]
+    assert fleet.results.report() == mrsysid.fit(quad_x, kept).report()
