@@ -155,7 +155,7 @@ pub struct PreparedPass {
 
 #[pymethods]
 impl PreparedPass {
-    /// Prepares the plan in `plan` (bytes of `pass_plan`) for the vehicle and options it
+    /// Prepares the plan in `plan` (bytes of `PlannedFit.plan`) for the vehicle and options it
     /// was made with.
     #[new]
     #[pyo3(signature = (
