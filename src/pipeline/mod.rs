@@ -15,10 +15,13 @@
 //! random.
 //!
 //! One concept a file: `request` (what is asked, and its checks), `split` (what each
-//! log's samples are for), `blocks` (the contiguous blocks of a single log), `stream` (reading a log in the pipeline's chunks),
-//! `feed` (Ω̈, progress and slow rotor thrusts on the way), `first_pass`, `folds`
-//! (cross-validation folds of both passes), `second_pass` and `segment_pass`,
-//! `threads` (jobs, segments, ordered results), `outcome` (what [`run`] returns).
+//! log's samples are for), `blocks` (the contiguous blocks of a single log), `stream`
+//! (reading a log in the pipeline's chunks), `feed` (Ω̈, progress and slow rotor thrusts
+//! on the way), `first_pass`, `folds` (cross-validation folds of both passes),
+//! `second_pass` and `segment_pass`, `remainder` (the third pass), `threads` (jobs,
+//! segments, ordered results), `outcome` (what [`run`] returns). Statistics as data:
+//! `framing` (the byte frame of every file kind), `parts` (first-pass parts) and
+//! `pass_parts` (the second and third passes as map-reduce).
 
 use crate::diagnose::{SCREENING_SAMPLES, Thinned};
 use crate::error::{Error, RequestError};
