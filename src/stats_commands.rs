@@ -170,7 +170,10 @@ pub fn fit_from_stats(cmd: &FitArgs, diagnosis_only: bool) -> Result<(), Failure
     };
     let report = results.report();
     if !cmd.quiet {
-        print_out(&tables::render(&report))?;
+        print_out(&match (&report.diagnosis, diagnosis_only) {
+            (Some(d), true) => tables::render_diagnosis(d),
+            _ => tables::render(&report),
+        })?;
     }
     write_report_and_model(cmd, &results, &report)?;
     if !cmd.quiet {
