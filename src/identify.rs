@@ -271,8 +271,11 @@ impl Identification {
     /// Reads the fit logs (not the validation logs) and returns each one's first pass as
     /// statistics: a part that can be saved, sent, merged with the parts of other logs
     /// made with the same settings, and fitted by [`Identification::run_from_stats`]
-    /// (statistics as data: one task per log, a merge, one fit). Logs are checked as
-    /// [`Identification::run`] checks them.
+    /// (statistics as data: one task per log, a merge, one fit). With the diagnosis on
+    /// (the default) each log's part also keeps its thinned samples (up to 20 000), which
+    /// a diagnosis from statistics needs ([`Identification::plan_from_stats`]);
+    /// `diagnose(false)` makes parts of about 25 kB a log for the Eq. 22 fit alone. Logs
+    /// are checked as [`Identification::run`] checks them.
     pub fn accumulate(&self) -> Result<StatsPart, Error> {
         if let Some(e) = &self.bad_samples {
             return Err(e.clone().into());
