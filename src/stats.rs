@@ -113,23 +113,32 @@ pub struct Accumulator {
 
 /// The serialised form of a q × q column-major upper-triangular matrix: q, then the
 /// entries on and above the diagonal, column by column (half the bytes of the whole;
-/// the entries below the diagonal are zero).
+/// the entries below the diagonal are zero), or none for the zero matrix (statistics of
+/// no sample).
 mod upper_triangle {
     use serde::de::Error;
     use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
+    /// The largest order read: beyond any model's column shapes, and refused before its
+    /// q² entries are allocated.
+    const MAX_ORDER: usize = 1 << 14;
+
     pub fn serialize<S: Serializer>(r: &[f64], s: S) -> Result<S::Ok, S::Error> {
         let q = r.len().isqrt();
-        let packed: Vec<f64> = (0..q)
-            .flat_map(|j| &r[j * q..j * q + j + 1])
-            .copied()
-            .collect();
+        let packed: Vec<f64> = match r.iter().all(|&v| v == 0.0) {
+            true => Vec::new(),
+            false => (0..q)
+                .flat_map(|j| &r[j * q..j * q + j + 1])
+                .copied()
+                .collect(),
+        };
         (q, packed).serialize(s)
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
         let (q, packed) = <(usize, Vec<f64>)>::deserialize(d)?;
-        if q.checked_mul(q + 1).map(|n| n / 2) != Some(packed.len()) {
+        let entries = |q: usize| q * (q + 1) / 2;
+        if q > MAX_ORDER || !(packed.is_empty() || packed.len() == entries(q)) {
             return Err(D::Error::custom(format!(
                 "a triangular factor of order {q} with {} entries",
                 packed.len()
@@ -718,5 +727,32 @@ impl Accumulator {
             measured: self.measured,
             motion: self.motion,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use serde::{Deserialize, Serialize};
+
+    #[derive(Debug, PartialEq, Serialize, Deserialize)]
+    struct Factor(#[serde(with = "super::upper_triangle")] Vec<f64>);
+
+    #[test]
+    fn triangular_factors_round_trip_and_an_absurd_order_is_refused() {
+        let upper = Factor(vec![1.0, 0.0, 2.0, 3.0]);
+        let bytes = postcard::to_stdvec(&upper).unwrap();
+        assert_eq!(postcard::from_bytes::<Factor>(&bytes).unwrap(), upper);
+        // The zero matrix is its order alone: 1 byte of q, 1 of an empty entry list.
+        let zero = Factor(vec![0.0; 9]);
+        let bytes = postcard::to_stdvec(&zero).unwrap();
+        assert_eq!(bytes.len(), 2);
+        assert_eq!(postcard::from_bytes::<Factor>(&bytes).unwrap(), zero);
+        // An order of 2^40 with no entries would ask for 2^80 values: refused, not
+        // allocated.
+        let absurd = postcard::to_stdvec(&(1usize << 40, Vec::<f64>::new())).unwrap();
+        let e = postcard::from_bytes::<Factor>(&absurd).unwrap_err();
+        assert!(!e.to_string().is_empty());
+        let short = postcard::to_stdvec(&(2usize, vec![1.0])).unwrap();
+        assert!(postcard::from_bytes::<Factor>(&short).is_err());
     }
 }

@@ -486,6 +486,17 @@ impl Thinned {
         }
     }
 
+    /// True when it could have been made by [`Thinned::new`] with `cap` and pushes of
+    /// samples of `rotors` rotors (a deserialised one may not be: a zero stride or cap
+    /// would never finish thinning).
+    pub fn is_consistent(&self, cap: usize, rotors: usize) -> bool {
+        self.cap == cap
+            && self.stride.is_power_of_two()
+            && self.chunk.len() <= cap
+            && self.chunk.check_lengths().is_ok()
+            && (self.chunk.is_empty() || self.chunk.rotor_count() == rotors)
+    }
+
     /// The kept samples.
     pub fn samples(&self) -> &SampleChunk {
         &self.chunk
@@ -514,6 +525,22 @@ mod tests {
         sorted.sort();
         sorted.dedup();
         assert_eq!(sorted.len(), 342, "no monomial twice");
+    }
+
+    #[test]
+    fn a_thinned_sample_with_a_zero_stride_or_another_cap_is_not_consistent() {
+        // A zero stride never doubles and a zero cap never stops halving: a
+        // deserialised sample like that would hang the merge, so parts refuse it.
+        let mut t = Thinned::new(8);
+        t.push(&ramp(20, 0));
+        assert!(t.is_consistent(8, 4));
+        assert!(!t.is_consistent(16, 4), "another cap");
+        assert!(!t.is_consistent(8, 6), "another rotor count");
+        let zero = Thinned {
+            stride: 0,
+            ..t.clone()
+        };
+        assert!(!zero.is_consistent(8, 4));
     }
 
     fn ramp(n: usize, offset: usize) -> SampleChunk {

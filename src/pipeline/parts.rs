@@ -227,11 +227,17 @@ impl StatsPart {
     /// with the same settings but altered, whose checksum was made to match).
     fn check_layout(&self, structure: &crate::model::ModelStructure) -> Result<(), StatsError> {
         let empty = Accumulator::new(structure);
-        match self.logs.iter().find(|l| !l.stats.has_layout_of(&empty)) {
+        let rotors = structure.rotor_count();
+        let screening_fits = |l: &LogPart| {
+            (l.screening.as_ref()).is_none_or(|t| t.is_consistent(SCREENING_SAMPLES, rotors))
+        };
+        let altered = |l: &&LogPart| !l.stats.has_layout_of(&empty) || !screening_fits(l);
+        match self.logs.iter().find(altered) {
             Some(log) => Err(StatsError::Format {
                 file: log.summary.file.clone(),
                 what: "statistics not laid out for the requested model (columns, shapes or \
-                       buffer sizes differ): the part was altered"
+                       buffer sizes differ, or screening samples inconsistent): the part was \
+                       altered"
                     .into(),
             }),
             None => Ok(()),
