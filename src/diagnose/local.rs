@@ -143,7 +143,7 @@ fn activity_patterns(signals: &[&[f64]], thresholds: &[f64]) -> Vec<u64> {
 
 /// Statistics of the samples where local candidates act, one accumulator per activity
 /// pattern ([`LocalRegions::push`]); [`LocalRegions::per_region`] makes each region's.
-#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Default)]
 pub struct ActivityParts {
     /// (pattern, statistics), patterns ascending.
     parts: Vec<(u64, Accumulator)>,
@@ -160,17 +160,6 @@ impl ActivityParts {
             }
         };
         &mut self.parts[at].1
-    }
-
-    /// The parts whose [`LocalRegions::per_region`] is `regions` (each region's
-    /// statistics, in region order), unchanged to the bit: each non-empty region's
-    /// statistics as the one pattern of that region alone.
-    pub fn from_regions(regions: Vec<Accumulator>) -> Self {
-        let parts = (regions.into_iter().enumerate())
-            .filter(|(_, a)| a.count() > 0)
-            .map(|(k, a)| (1u64 << k, a))
-            .collect();
-        Self { parts }
     }
 
     /// Merges `later`'s statistics (of other samples) pattern by pattern.

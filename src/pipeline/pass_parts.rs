@@ -22,6 +22,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::FitRequest;
+use super::first_fit;
 use super::framing::{self, fnv1a};
 use super::outcome::FitOutcome;
 use super::parts::{StatsPart, from_parts, settings};
@@ -29,9 +30,7 @@ use super::pass_share::{Extended, LogPass, PassContext, Start};
 use super::remainder::log_remainder;
 use super::second_pass::{Log, extended, pass_log, reduce};
 use super::split::Role;
-use super::{accumulate_error, first_fit};
 use crate::diagnose::Diagnosis;
-use crate::diagnose::local::ActivityParts;
 use crate::error::{Error, StatsError};
 use crate::estimate::remainder::Remainder;
 use crate::estimate::{self, DiagnosticOptions, Fit, ResidualPass, ResidualSums};
@@ -273,22 +272,13 @@ impl PreparedPass {
             in_log: [0; 2],
         };
         let share = pass_log(&ctx, &pass, self.req.threads, start)?;
-        // Each region's statistics, as the reduce makes them (fewer bytes to send than
-        // one accumulator per activity pattern).
-        let local = match &self.extended {
-            Some(ext) => (share.local.iter())
-                .map(|g| ext.regions.per_region(g, &ext.structure))
-                .collect::<Result<_, _>>()
-                .map_err(accumulate_error(log))?,
-            None => Vec::new(),
-        };
         Ok(PassPart {
             plan: self.digest,
             log: entry.name.clone(),
             residuals: share.residuals.sums(),
             span: share.span,
             candidates: share.candidates,
-            local,
+            local: share.regions,
         })
     }
 
@@ -425,11 +415,8 @@ fn share_of(
         series: Default::default(),
         span: part.span,
         candidates: part.candidates,
-        local: part
-            .local
-            .into_iter()
-            .map(ActivityParts::from_regions)
-            .collect(),
+        local: Vec::new(),
+        regions: part.local,
     })
 }
 

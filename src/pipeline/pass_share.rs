@@ -50,8 +50,11 @@ pub(super) struct LogPass {
     /// of a single fit log's blocks (`None` while a piece has no sample).
     pub(super) candidates: Option<Vec<Option<Accumulator>>>,
     /// The same over the samples where local candidates act, by activity pattern, per
-    /// [`LocalGroup`] of the log.
+    /// [`LocalGroup`] of the log, while the log is passed.
     pub(super) local: Vec<ActivityParts>,
+    /// Each local region's statistics per [`LocalGroup`], made from `local` (then
+    /// emptied) once the whole log is passed ([`super::second_pass::pass_log`]).
+    pub(super) regions: Vec<Vec<Accumulator>>,
 }
 
 /// The local-region statistics a run of samples goes to: those of the held-out data of

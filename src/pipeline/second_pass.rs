@@ -167,7 +167,7 @@ pub(super) fn second_pass(
 pub(super) fn reduce(
     ctx: &PassContext,
     jobs: &[(LogSource, Role)],
-    shares: Vec<LogPass>,
+    mut shares: Vec<LogPass>,
     out: &mut FitOutcome,
 ) -> Result<Option<Diagnosis>, Error> {
     let req = ctx.req;
@@ -195,13 +195,10 @@ pub(super) fn reduce(
     let (Some(mut options), Some(ext)) = (req.diagnose, ctx.extended) else {
         return Ok(None);
     };
-    let mut local_parts = Vec::new();
-    for (share, (source, _)) in shares.iter().zip(jobs).take(req.logs.len()) {
-        for group in &share.local {
-            let regions = ext.regions.per_region(group, &ext.structure);
-            local_parts.push(regions.map_err(accumulate_error(source))?);
-        }
-    }
+    let local_parts: Vec<Vec<Accumulator>> = (shares.iter_mut())
+        .take(req.logs.len())
+        .flat_map(|share| std::mem::take(&mut share.regions))
+        .collect();
     let per_log: Vec<Vec<Accumulator>> = shares
         .into_iter()
         .filter_map(|s| s.candidates)
@@ -333,6 +330,13 @@ pub(super) fn pass_log(
         }
     }
     share.times_from_start();
+    if let Some(ext) = ctx.extended {
+        let local = std::mem::take(&mut share.local);
+        share.regions = (local.iter())
+            .map(|group| ext.regions.per_region(group, &ext.structure))
+            .collect::<Result<_, _>>()
+            .map_err(accumulate_error(source))?;
+    }
     Ok(share)
 }
 

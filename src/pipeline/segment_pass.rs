@@ -202,6 +202,7 @@ impl LogPass {
             span: [(f64::NAN, f64::NAN); 2],
             candidates: ctx.extended.as_ref().map(|_| vec![None; pieces]),
             local: vec![ActivityParts::default(); groups],
+            regions: Vec::new(),
         }
     }
 
