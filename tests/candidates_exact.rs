@@ -264,6 +264,19 @@ fn quadratic_drag_columns_are_exact() {
 }
 
 #[test]
+fn vertical_linear_drag_column_is_exact() {
+    // An airframe drag −D_z w on F_z alone, at the CG: no moment, no rotor speed.
+    let v = vehicle(Preset::QuadX);
+    let d = 0.4;
+    let e = check(&v, EffectKind::VerticalLinearDrag, &[d], |s, b| {
+        let mut w = b;
+        w[2] -= d * s.velocity[2];
+        w
+    });
+    assert!(e < 1e-9, "{e:e}");
+}
+
+#[test]
 fn delay_columns_are_first_order_exact() {
     // Loads follow Ω(t + τ) = Ω + τ Ω̇ + O(τ²): the candidate is the first-order term, so
     // its error relative to the effect is O(τ Ω̈/Ω̇), here ~τΩ̇/Ω ≈ 1e-3.

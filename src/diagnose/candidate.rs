@@ -53,6 +53,9 @@ pub enum EffectKind {
     /// Rotor thrust terms of second order in the hub's in-plane and axial velocities
     /// (V_h w_i, w_i²) that the first-order inflow plane of Eq. 6 drops (a completion).
     SecondOrderInflow,
+    /// Linear vertical airframe drag, independent of rotor speed (a completion of
+    /// Assumption 3: Eq. 22 lumps such a drag into the in-plane forces only).
+    VerticalLinearDrag,
     /// Constant accelerometer bias in forces derived as m a.
     AccelerometerBias,
     /// A slow moment the model lacks, balanced by the attitude loop: the slow part of

@@ -28,6 +28,7 @@ mod rotor_speed_delay;
 mod second_order_inflow;
 mod steady_wind;
 mod trim_moment;
+mod vertical_drag;
 mod vortex_ring;
 mod wake_interaction;
 mod yaw_rate_drag;
@@ -41,7 +42,7 @@ type Effect = fn(&CandidateContext) -> Vec<Candidate>;
 
 /// Every effect of the library, in the order its candidates are offered (the order
 /// breaks ties in the search).
-const LIBRARY: [Effect; 19] = [
+const LIBRARY: [Effect; 20] = [
     ground_effect::candidates,
     rotor_asymmetry::candidates,
     cg_offset::candidates,
@@ -58,6 +59,7 @@ const LIBRARY: [Effect; 19] = [
     rotor_flapping::candidates,
     rotor_rate_damping::candidates,
     second_order_inflow::candidates,
+    vertical_drag::candidates,
     rotor_speed_delay::acceleration_thrust,
     accelerometer_bias::candidates,
     trim_moment::candidates,
@@ -131,6 +133,7 @@ mod tests {
             "rotor flapping moment",
             "rotor rate damping",
             "second-order inflow",
+            "linear vertical airframe drag",
             "thrust from rotor acceleration",
             "accelerometer bias",
             "trim moment, 0.5 Hz",
@@ -146,7 +149,7 @@ mod tests {
     /// `*scale*` and `*loss*`, a freed coefficient for `name@axis`).
     #[test]
     fn parameters_carry_their_range_and_reading() {
-        let ranges: [(&str, f64, f64); 17] = [
+        let ranges: [(&str, f64, f64); 18] = [
             ("thrust_scale_", -0.6, 0.6),
             ("in_plane_scale_", -0.6, 0.6),
             ("torque_scale_", -0.6, 0.6),
@@ -167,6 +170,8 @@ mod tests {
             ("trim_roll", 0.0, 2.0),
             ("trim_pitch", 0.0, 2.0),
             ("trim_yaw", 0.0, f64::INFINITY),
+            // Added with the linear vertical airframe drag (never in the old table).
+            ("linear_drag_z", 0.0, f64::INFINITY),
         ];
         let library = full_library();
         let mut ranged = 0;
@@ -189,8 +194,8 @@ mod tests {
             }
         }
         // 4 rotors × 3 scales, 3 CG, 2 ground, 4 wake, vortex ring, 2 × 3 drag, delay,
-        // 3 wind, 2 bias, 3 bands × 3 trim fractions.
-        assert_eq!(ranged, 43);
+        // 3 wind, 2 bias, 3 bands × 3 trim fractions, vertical linear drag.
+        assert_eq!(ranged, 44);
         let freed = library
             .iter()
             .filter(|c| c.kind == EffectKind::DecoupledMoments)
