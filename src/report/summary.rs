@@ -239,6 +239,15 @@ pub struct EffectParameterRow {
     pub std: f64,
     /// Unit.
     pub unit: String,
+    /// For an effect of the adopted model: its estimate there (after every later
+    /// addition, withdrawal and the parsimony step), in the same unit; `estimate` is the
+    /// one when it was added. `None` in the step rankings, and when parsimony left all
+    /// its columns out.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_estimate: Option<f64>,
+    /// Standard deviation of `final_estimate`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_std: Option<f64>,
     /// How the estimate reads (a fraction is printed in %, a freed moment coefficient
     /// with its tie to the force). Not in the JSON, whose schema this does not change: a
     /// report read back from JSON prints every estimate as a plain value.
@@ -280,6 +289,8 @@ impl From<&CandidateScore> for EffectRow {
                     estimate: p.estimate,
                     std: p.std,
                     unit: p.unit.clone(),
+                    final_estimate: None,
+                    final_std: None,
                     reading: p.reading,
                 })
                 .collect(),
@@ -294,6 +305,20 @@ impl From<&CandidateScore> for EffectRow {
                 .map(|r| r.to_string())
                 .unwrap_or_default(),
         }
+    }
+}
+
+impl EffectRow {
+    /// The row of an effect of the adopted model `d`, with its parameters' estimates
+    /// there.
+    fn with_final_estimates(mut self, d: &Diagnosis) -> Self {
+        for p in &mut self.parameters {
+            if let Some(id) = d.structure.param_id(&p.name) {
+                p.final_estimate = Some(d.theta[id.index()]);
+                p.final_std = Some(d.std[id.index()]);
+            }
+        }
+        self
     }
 }
 
@@ -319,7 +344,11 @@ impl From<&Diagnosis> for DiagnosisReport {
             .collect();
         folds.push(before_after("pooled", &d.before, &d.after));
         Self {
-            effects_added: d.effects_added.iter().map(EffectRow::from).collect(),
+            effects_added: d
+                .effects_added
+                .iter()
+                .map(|e| EffectRow::from(e).with_final_estimates(d))
+                .collect(),
             unsupported: d
                 .unsupported
                 .iter()
