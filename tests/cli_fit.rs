@@ -573,11 +573,20 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
     let d = &v["diagnosis"];
     let first = first_effect(d);
     assert_eq!(first["name"], "CG offset");
-    let (dx, dy) = (
-        effect_parameter(first, "cg_dx"),
-        effect_parameter(first, "cg_dy"),
-    );
-    // Within 10 % (measured on a 60 s flight: 9.4 mm and −7.6 mm).
+    let final_estimate = |name: &str| {
+        first["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap()["final_estimate"]
+            .as_f64()
+            .unwrap()
+    };
+    let (dx, dy) = (final_estimate("cg_dx"), final_estimate("cg_dy"));
+    // In the adopted model, within 10 % (measured 9.57 mm and −7.56 mm; when the offset
+    // was added 8.9 mm and −5.9 mm: it entered after the in-plane force lever arm and
+    // before the linear vertical airframe drag, which share its moments' data).
     assert!((dx - 0.010).abs() < 0.001, "{dx}");
     assert!((dy + 0.008).abs() < 0.0008, "{dy}");
     let (b, a) = (
@@ -609,49 +618,92 @@ fn diagnosis_on_a_flight_finds_an_unmeasured_steady_wind() {
 }
 
 #[test]
-fn clean_flights_name_no_undeclared_effect_without_its_look_alikes() {
+fn clean_flights_name_no_undeclared_effect() {
     // Ten 30 s flights without any declared effect, loads logged with noise. The truth's
-    // momentum-theory inflow (src/sim/inflow.rs) changes thrust strongly in descent near
-    // ν0, which every one of these flights visits (48–102 samples descending at
-    // 0.5–1.5 ν0 with V_h < ν0), and which Eq. 22's linearised inflow lacks: a w|w|-like
-    // shape on F_z. The vortex-ring candidate is that nonlinearity; vertical quadratic
-    // airframe drag (drag area along z only, the in-plane areas left out as unsupported)
-    // puts the same shape on F_z, and judged on contiguous blocks of the flight it pays
-    // on 3 of the 10 seeds (none with every fifth 2 s segment held out, which let the
-    // fit interpolate). Nothing in the data separates the two, so a named effect may be
-    // added on a clean flight only with the look-alikes that explain about as much said
-    // in its finding, and on at most 3 of the 10 seeds. Model completions and unspecific
-    // terms may be added: the simulator's inflow and hub kinematics hold physics Eq. 22
-    // lacks, and naming it as such is right.
-    let mut named_seeds = 0;
+    // airframe has a linear drag along every body axis (src/sim/truth.rs, 0.15 N s/m
+    // along z), which Eq. 22 holds in-plane (C_H_mub_mu0 ν0 u) but on F_z only inside
+    // the rotor-speed-scaled C_T_muw it shares with the moments: the completion "linear
+    // vertical airframe drag" takes it. Before that completion, vertical quadratic drag
+    // (a w|w| look-alike) was named at 3 of these seeds (41, 42, 48); with the truth's
+    // vertical linear drag set to zero it was named at none. The truth's momentum-theory
+    // inflow also changes thrust in descent near ν0, which every flight visits and
+    // Eq. 22's linearised inflow lacks; at seed 45 the vortex-ring candidate takes that
+    // shape (as before this completion). So: at most one of the ten seeds names an
+    // effect, and the airframe drag is named at none. Model completions and unspecific
+    // terms may be added: the simulator's inflow, airframe and hub kinematics hold
+    // physics Eq. 22 lacks, and naming it as such is right.
+    let mut named_seeds = Vec::new();
     for seed in 40..50 {
         let v = simulate_and_fit(&format!("clean_{seed}"), &["--seed", &seed.to_string()]);
-        let d = &v["diagnosis"];
-        let effects: Vec<&str> = d["effects_added"]
+        let named: Vec<String> = v["diagnosis"]["effects_added"]
             .as_array()
             .unwrap()
             .iter()
             .filter(|e| e["model_completion"] == false && e["unspecific"] == false)
-            .map(|e| e["name"].as_str().unwrap())
-            .filter(|&n| n != "vortex-ring state")
+            .map(|e| e["name"].as_str().unwrap().to_string())
             .collect();
-        let findings: Vec<&str> = d["findings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|f| f.as_str().unwrap())
-            .collect();
-        for name in &effects {
-            assert!(
-                findings
-                    .iter()
-                    .any(|f| f.starts_with(name) && f.contains("explains about as much")),
-                "seed {seed}: {name} claimed alone: {findings:?}"
-            );
+        assert!(
+            !named.iter().any(|n| n.contains("airframe drag")),
+            "seed {seed}: {named:?}"
+        );
+        if !named.is_empty() {
+            named_seeds.push((seed, named));
         }
-        named_seeds += usize::from(!effects.is_empty());
     }
-    assert!(named_seeds <= 3, "{named_seeds} of 10 seeds name an effect");
+    assert!(named_seeds.len() <= 1, "{named_seeds:?}");
+}
+
+#[test]
+fn a_vertical_airframe_drag_is_recovered_as_the_linear_drag_completion() {
+    // A sweep whose airframe drags 0.6 N s/m along z (four times the simulator's
+    // default): the completion's column −D_z w holds it, so the diagnosis adds it first
+    // and reads D_z. Measured 0.607 at seeds 1–3: within 3 % (the truth's blade-element
+    // thrust has Ω-free w structure of its own, which the estimate shares: 0.107 on the
+    // default 0.15 N s/m).
+    let rotor = tmp("vertical_drag_rotor.toml");
+    std::fs::write(&rotor, "linear_drag = [0.0753, 0.0753, 0.6]\n").unwrap();
+    let log = tmp("vertical_drag.csv");
+    let out = mrsysid(&[
+        "simulate",
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--rotor",
+        rotor.to_str().unwrap(),
+        "--mode",
+        "sweep",
+        "--points",
+        "3000",
+        "--seed",
+        "2",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = tmp("vertical_drag.json");
+    let out = mrsysid(&[
+        "fit",
+        log.to_str().unwrap(),
+        "--vehicle",
+        "data/vehicles/quad_x.toml",
+        "--json",
+        report.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&report);
+    let first = &v["diagnosis"]["effects_added"][0];
+    assert_eq!(first["name"], "linear vertical airframe drag");
+    assert_eq!(first["model_completion"], true);
+    let d = effect_parameter(first, "linear_drag_z");
+    assert!((d - 0.6).abs() < 0.018, "{d}");
 }
 
 #[test]

@@ -79,6 +79,57 @@ impl Search<'_> {
         Some((i, effect.total_gain > (1.0 + look_alike) * first.total_gain))
     }
 
+    /// A completion of Eq. 22 that explains about as much as the step's winner, a named
+    /// effect: the completion missed only the held-out bar (it predicts the held-out data
+    /// better than the current model, by less than the bar asks), and the two are within
+    /// [`look_alike`] of each other's summed gain; of several, the likeliest. Completions go before undeclared
+    /// effects (an effect is judged against a model with the terms Eq. 22's own
+    /// assumptions drop), so when the effect is no longer accepted once the completion is
+    /// in the model (the completion takes its evidence), the completion goes first and
+    /// the effect is its look-alike, as in [`Self::confounded_with_completion`];
+    /// otherwise the effect keeps its place and the completion is its look-alike.
+    /// Returns the completion's index in `scored` and whether it goes first.
+    ///
+    /// [`look_alike`]: crate::diagnose::DiagnoseOptions::look_alike
+    pub(super) fn completion_under_effect(
+        &self,
+        scored: &[(CandidateScore, usize, Option<Trial>)],
+    ) -> Option<(usize, bool)> {
+        let (first, c, _) = scored.first()?;
+        if first.rejected.is_some() || first.role != Role::Mechanism {
+            return None;
+        }
+        let look_alike = self.options.look_alike;
+        let (i, (_, _, Some(with_completion))) = scored
+            .iter()
+            .enumerate()
+            .skip(1)
+            .filter(|(_, (s, _, t))| {
+                t.is_some()
+                    && s.role.is_model_completion()
+                    && matches!(s.rejected, Some(Rejection::NotPredictive { .. }))
+                    && s.held_out_lr > 0.0
+                    && s.total_gain >= (1.0 - look_alike) * first.total_gain
+                    && first.total_gain <= (1.0 + look_alike) * s.total_gain
+            })
+            .max_by(|a, b| a.1.0.held_out_lr.total_cmp(&b.1.0.held_out_lr))?
+        else {
+            return None;
+        };
+        let local = self.local_before(*c, with_completion);
+        let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
+        let (after, _, _) = score(
+            self,
+            &with_completion.columns,
+            *c,
+            with_completion,
+            local,
+            self.level(*c),
+            self.options.min_gain,
+        );
+        Some((i, after.rejected.is_some()))
+    }
+
     /// Look-alikes of `best` (candidates of other kinds in its group within `look_alike`
     /// of its gain, significant and plausible) and the findings of its own kind that fit
     /// the held-out data as well within noise (κ χ²₁(1 − α) of its likelihood ratio).

@@ -37,7 +37,9 @@
 //! After each addition every earlier addition is tested again against the model
 //! without it, and withdrawn when it would no longer be accepted (a term that only
 //! stood in for the effect found later); to stay it needs half the gain it needed
-//! to enter, so a term near the bar does not enter and leave in turn. An effect
+//! to enter, so a term near the bar does not enter and leave in turn. A withdrawn
+//! addition is not offered again, except once when the addition whose retest withdrew
+//! it is withdrawn in its turn (it gave way to a term that no longer holds). An effect
 //! offered in several forms ([`super::Candidate::forms_of`]) is then given the
 //! form the held-out data now favour (largest held-out likelihood ratio). Terms of
 //! the generic pool are a family of unnamed hypotheses: at most
@@ -56,7 +58,11 @@
 //! once the completion is in the model) while it explains about as much is reported as
 //! the completion's look-alike; when it explains clearly more (by more than
 //! [`DiagnoseOptions::look_alike`]) it is added first instead, the completion its
-//! look-alike, tried again in the next step.
+//! look-alike, tried again in the next step. The other way round, a completion that
+//! explains about as much as a winning named effect but missed the held-out bar (while
+//! still predicting the held-out data better than the current model) is added instead
+//! when the effect is no longer accepted once the completion is in, the effect its
+//! look-alike; otherwise it is the effect's look-alike.
 //! Terms of the
 //! generic pool ([`super::generic`]: residual structure with no name, whose Bonferroni
 //! divisor is the whole pool it was screened from) and moment coefficients freed from

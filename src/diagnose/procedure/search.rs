@@ -44,6 +44,8 @@ pub fn diagnose_on_threads(
         kept,
         current: base.clone(),
         tried: Vec::new(),
+        displaced: Vec::new(),
+        offered_again: Vec::new(),
         in_model: Vec::new(),
         earlier_tests: 0,
         entry_tests: Vec::new(),
@@ -241,6 +243,16 @@ impl Search<'_> {
                 }
             })
             .map(|i| scored[i].0.name.clone());
+        let under_effect = self.completion_under_effect(&scored).map(|(i, first)| {
+            if first {
+                let mut completion = scored.remove(i);
+                completion.0.rejected = None;
+                scored.insert(0, completion);
+                scored[1].0.name.clone()
+            } else {
+                scored[i].0.name.clone()
+            }
+        });
         let best_ok = scored
             .first()
             .filter(|s| s.0.rejected.is_none())
@@ -250,6 +262,7 @@ impl Search<'_> {
             .map(|best| self.alternatives(best, &scored[1..]))
             .unwrap_or_default();
         look_alikes.extend(confounded);
+        look_alikes.extend(under_effect);
         let mut ranking: Vec<CandidateScore> = Vec::with_capacity(scored.len());
         let mut winner = None;
         for (i, (s, c, t)) in scored.into_iter().enumerate() {
@@ -308,11 +321,29 @@ impl Search<'_> {
                 self.kept = without;
                 self.current = reduced;
                 self.in_model.retain(|(c, _, _)| *c != e);
+                self.withdraw(e, latest);
             } else if let Some(said) = self.rechoose_form(e, &s, &without, &reduced, stay) {
                 withdrawn.push(said);
             }
         }
         withdrawn
+    }
+
+    /// Records that the retest after adding `latest` withdrew `e`, and offers again the
+    /// candidates `e`'s own addition had withdrawn: they gave way to a term that no
+    /// longer holds, so the search judges them against the model without it (each
+    /// once, so that the search ends).
+    fn withdraw(&mut self, e: usize, latest: usize) {
+        let (again, kept): (Vec<_>, Vec<_>) = self
+            .displaced
+            .iter()
+            .partition(|&&(d, by)| by == e && !self.offered_again.contains(&d));
+        self.displaced = kept;
+        for (d, _) in again {
+            self.tried.retain(|&c| c != d);
+            self.offered_again.push(d);
+        }
+        self.displaced.push((e, latest));
     }
 
     /// For an earlier addition `e` offered in several forms (`in_use` its score against

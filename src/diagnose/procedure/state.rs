@@ -18,8 +18,13 @@ pub(super) struct Search<'a> {
     /// Columns of the current model (indices into `stats.extended`).
     pub(super) kept: Vec<usize>,
     pub(super) current: Trial,
-    /// Candidates added so far, withdrawn or not (never tried again).
+    /// Candidates added so far, withdrawn or not (not tried again, but see `displaced`).
     pub(super) tried: Vec<usize>,
+    /// Withdrawn candidates with the addition whose retest withdrew them: when that
+    /// addition is withdrawn in its turn, the candidate is offered again (once).
+    pub(super) displaced: Vec<(usize, usize)>,
+    /// Candidates offered again after their displacer left (never a second time).
+    pub(super) offered_again: Vec<usize>,
     /// Candidates in the current model: index, score when added, the finding.
     pub(super) in_model: Vec<(usize, CandidateScore, String)>,
     /// Named candidates scored in the steps before the current one (the search-wide
@@ -64,6 +69,7 @@ impl Search<'_> {
         let earlier = self
             .entry_tests
             .iter()
+            .rev()
             .find(|(e, _)| *e == c)
             .map_or(self.earlier_tests, |(_, t)| *t);
         self.level_after(c, earlier)
