@@ -62,21 +62,22 @@ fn effect_parameter(effect: &serde_json::Value, name: &str) -> f64 {
 /// Simulates a 30 s quad× flight logged at 100 Hz with `extra` simulate arguments, fits
 /// it with the diagnosis, and returns the JSON report.
 fn simulate_and_fit(name: &str, extra: &[&str]) -> serde_json::Value {
+    let flight = ["--mode", "flight", "--duration", "30", "--log-rate", "100"];
+    simulate_data_and_fit(name, &[&flight, extra].concat())
+}
+
+/// Simulates the shipped quad× with the simulate arguments `data` (mode and its
+/// settings, effects, seed), fits it with the diagnosis, and returns the JSON report.
+fn simulate_data_and_fit(name: &str, data: &[&str]) -> serde_json::Value {
     let log = tmp(&format!("{name}.csv"));
     let mut args = vec![
         "simulate",
         "--vehicle",
         "data/vehicles/quad_x.toml",
-        "--mode",
-        "flight",
-        "--duration",
-        "30",
-        "--log-rate",
-        "100",
         "--out",
         log.to_str().unwrap(),
     ];
-    args.extend_from_slice(extra);
+    args.extend_from_slice(data);
     let out = mrsysid(&args);
     assert!(
         out.status.success(),
@@ -662,43 +663,11 @@ fn a_vertical_airframe_drag_is_recovered_as_the_linear_drag_completion() {
     // default 0.15 N s/m).
     let rotor = tmp("vertical_drag_rotor.toml");
     std::fs::write(&rotor, "linear_drag = [0.0753, 0.0753, 0.6]\n").unwrap();
-    let log = tmp("vertical_drag.csv");
-    let out = mrsysid(&[
-        "simulate",
-        "--vehicle",
-        "data/vehicles/quad_x.toml",
-        "--rotor",
-        rotor.to_str().unwrap(),
-        "--mode",
-        "sweep",
-        "--points",
-        "3000",
-        "--seed",
-        "2",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let sweep = ["--mode", "sweep", "--points", "3000", "--seed", "2"];
+    let v = simulate_data_and_fit(
+        "vertical_drag",
+        &[&sweep[..], &["--rotor", rotor.to_str().unwrap()]].concat(),
     );
-    let report = tmp("vertical_drag.json");
-    let out = mrsysid(&[
-        "fit",
-        log.to_str().unwrap(),
-        "--vehicle",
-        "data/vehicles/quad_x.toml",
-        "--json",
-        report.to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v = json(&report);
     let first = &v["diagnosis"]["effects_added"][0];
     assert_eq!(first["name"], "linear vertical airframe drag");
     assert_eq!(first["model_completion"], true);

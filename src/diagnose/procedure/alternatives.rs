@@ -64,18 +64,7 @@ impl Search<'_> {
                 && !s.role.is_unspecific()
                 && s.total_gain >= (1.0 - look_alike) * first.total_gain
         })?;
-        let local = self.local_before(*c, with_completion);
-        let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
-        let (after, _, _) = score(
-            self,
-            &with_completion.columns,
-            *c,
-            with_completion,
-            local,
-            self.level(*c),
-            self.options.min_gain,
-        );
-        after.rejected.as_ref()?;
+        self.scored_in(*c, with_completion).rejected.as_ref()?;
         Some((i, effect.total_gain > (1.0 + look_alike) * first.total_gain))
     }
 
@@ -116,18 +105,24 @@ impl Search<'_> {
         else {
             return None;
         };
-        let local = self.local_before(*c, with_completion);
+        Some((i, self.scored_in(*c, with_completion).rejected.is_some()))
+    }
+
+    /// Candidate `c` scored against `model` at this step's level and bar.
+    fn scored_in(&self, c: usize, model: &Trial) -> CandidateScore {
+        let local = self.local_before(c, model);
         let local = local.as_ref().map(|(lf, cv)| (*lf, cv));
-        let (after, _, _) = score(
+        let level = self.level(c);
+        score(
             self,
-            &with_completion.columns,
-            *c,
-            with_completion,
+            &model.columns,
+            c,
+            model,
             local,
-            self.level(*c),
+            level,
             self.options.min_gain,
-        );
-        Some((i, after.rejected.is_some()))
+        )
+        .0
     }
 
     /// Look-alikes of `best` (candidates of other kinds in its group within `look_alike`
