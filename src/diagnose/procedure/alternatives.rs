@@ -71,13 +71,14 @@ impl Search<'_> {
     /// A completion of Eq. 22 that explains about as much as the step's winner, a named
     /// effect: the completion missed only the held-out bar (it predicts the held-out data
     /// better than the current model, by less than the bar asks), and the two are within
-    /// [`look_alike`] of each other's summed gain; of several, the likeliest. Completions go before undeclared
-    /// effects (an effect is judged against a model with the terms Eq. 22's own
-    /// assumptions drop), so when the effect is no longer accepted once the completion is
-    /// in the model (the completion takes its evidence), the completion goes first and
-    /// the effect is its look-alike, as in [`Self::confounded_with_completion`];
-    /// otherwise the effect keeps its place and the completion is its look-alike.
-    /// Returns the completion's index in `scored` and whether it goes first.
+    /// [`look_alike`] of each other's summed gain; of several, the likeliest.
+    /// Completions go before undeclared effects (an effect is judged against a model
+    /// with the terms Eq. 22's own assumptions drop), so when the effect is no longer
+    /// accepted once the completion is in the model (the completion takes its
+    /// evidence), the completion goes first and the effect is its look-alike, as in
+    /// [`Self::confounded_with_completion`]; otherwise the effect keeps its place and
+    /// the completion is its look-alike. Returns the completion's index in `scored` and
+    /// whether it goes first.
     ///
     /// [`look_alike`]: crate::diagnose::DiagnoseOptions::look_alike
     pub(super) fn completion_under_effect(
