@@ -54,7 +54,8 @@ pub fn diagnose_on_threads(
     let mut steps = Vec::new();
     let mut stopped_at_limit = false;
     loop {
-        if search.tried.len() >= options.max_effects {
+        // Every addition counts, a candidate offered again and added twice included.
+        if search.tried.len() + search.offered_again.len() >= options.max_effects {
             stopped_at_limit = search.tried.len() < stats.candidates.len();
             break;
         }
