@@ -125,12 +125,13 @@ mod upper_triangle {
 
     pub fn serialize<S: Serializer>(r: &[f64], s: S) -> Result<S::Ok, S::Error> {
         let q = r.len().isqrt();
-        let packed: Vec<f64> = match r.iter().all(|&v| v == 0.0) {
-            true => Vec::new(),
-            false => (0..q)
+        let packed: Vec<f64> = if r.iter().all(|&v| v == 0.0) {
+            Vec::new()
+        } else {
+            (0..q)
                 .flat_map(|j| &r[j * q..j * q + j + 1])
                 .copied()
-                .collect(),
+                .collect()
         };
         (q, packed).serialize(s)
     }

@@ -6,49 +6,15 @@
 
 use std::path::PathBuf;
 
-use mrsysid::{
-    Identification, PassPart, PassPlan, RemainderPart, RemainderPlan, StatsError, StatsPart,
-};
+use mrsysid::{Identification, PassPart, PassPlan, RemainderPart, RemainderPlan};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 use crate::errors::to_py;
 use crate::fit::Options;
 use crate::results::Results;
-use crate::stats::part;
+use crate::stats::{merged, stats_err};
 use crate::vehicle::Vehicle;
-
-/// A library error as the Python exception it maps to.
-fn stats_err(py: Python<'_>, e: StatsError) -> PyErr {
-    to_py(py, &e.into())
-}
-
-/// The builder for `vehicle` and the shared options (`groups` for the reduce).
-#[allow(clippy::too_many_arguments)]
-fn builder(
-    py: Python<'_>,
-    vehicle: &Vehicle,
-    mapping: Option<PathBuf>,
-    threads: Option<usize>,
-    inflow: &str,
-    linear_vh: bool,
-    rotor_inertia: &str,
-    drop_invalid: bool,
-    loads_low_pass: Option<f64>,
-    keep_ground: bool,
-) -> PyResult<Identification> {
-    Options {
-        mapping,
-        threads,
-        inflow,
-        linear_vh,
-        rotor_inertia,
-        drop_invalid,
-        loads_low_pass,
-        keep_ground,
-    }
-    .builder(py, vehicle)
-}
 
 /// The Eq. 22 fit of the logs of `parts` and `validate_parts` and the plan of their
 /// second pass (see `mrsysid.dask`): the driver's side of the diagnosis from statistics.
@@ -84,9 +50,7 @@ impl PlannedFit {
         keep_ground: bool,
         groups: Vec<String>,
     ) -> PyResult<Self> {
-        let job = builder(
-            py,
-            &vehicle,
+        let job = Options {
             mapping,
             threads,
             inflow,
@@ -95,7 +59,8 @@ impl PlannedFit {
             drop_invalid,
             loads_low_pass,
             keep_ground,
-        )?
+        }
+        .builder(py, &vehicle)?
         .groups(groups);
         let fit = merged(py, &parts, "parts")?
             .ok_or_else(|| pyo3::exceptions::PyValueError::new_err("PlannedFit: no part to fit"))?;
@@ -134,19 +99,6 @@ impl PlannedFit {
     }
 }
 
-/// The parts in `parts` (named `name[k]` in errors) merged in order; `None` for none.
-fn merged(py: Python<'_>, parts: &[Vec<u8>], name: &str) -> PyResult<Option<StatsPart>> {
-    let mut all: Option<StatsPart> = None;
-    for (k, bytes) in parts.iter().enumerate() {
-        let p = part(py, bytes, &format!("{name}[{k}]"))?;
-        match all.as_mut() {
-            Some(a) => a.merge(&p).map_err(|e| stats_err(py, e))?,
-            None => all = Some(p),
-        }
-    }
-    Ok(all)
-}
-
 /// A second-pass plan prepared for passing its logs: made once per worker process.
 #[pyclass(frozen, module = "mrsysid._mrsysid")]
 pub struct PreparedPass {
@@ -176,9 +128,7 @@ impl PreparedPass {
         loads_low_pass: Option<f64>,
         keep_ground: bool,
     ) -> PyResult<Self> {
-        let job = builder(
-            py,
-            &vehicle,
+        let job = Options {
             mapping,
             threads,
             inflow,
@@ -187,7 +137,8 @@ impl PreparedPass {
             drop_invalid,
             loads_low_pass,
             keep_ground,
-        )?;
+        }
+        .builder(py, &vehicle)?;
         let plan = PassPlan::from_bytes(&plan, "plan").map_err(|e| stats_err(py, e))?;
         let inner = py.detach(|| job.prepare_pass(plan));
         let inner = inner.map_err(|e| to_py(py, &e))?;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use mrsysid::StatsPart;
+use mrsysid::{StatsError, StatsPart};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
@@ -65,23 +65,33 @@ pub fn accumulate<'py>(
     Ok(PyBytes::new(py, &part.to_bytes()))
 }
 
+/// A statistics error as the Python exception it maps to.
+pub fn stats_err(py: Python<'_>, e: StatsError) -> PyErr {
+    to_py(py, &e.into())
+}
+
 /// Reads the part in `bytes` (named `name` in errors).
 pub fn part(py: Python<'_>, bytes: &[u8], name: &str) -> PyResult<StatsPart> {
-    StatsPart::from_bytes(bytes, name).map_err(|e| to_py(py, &e.into()))
+    StatsPart::from_bytes(bytes, name).map_err(|e| stats_err(py, e))
+}
+
+/// The parts in `parts` (named `name[k]` in errors) merged in order; `None` for none.
+pub fn merged(py: Python<'_>, parts: &[Vec<u8>], name: &str) -> PyResult<Option<StatsPart>> {
+    let mut all: Option<StatsPart> = None;
+    for (k, bytes) in parts.iter().enumerate() {
+        let p = part(py, bytes, &format!("{name}[{k}]"))?;
+        match all.as_mut() {
+            Some(a) => a.merge(&p).map_err(|e| stats_err(py, e))?,
+            None => all = Some(p),
+        }
+    }
+    Ok(all)
 }
 
 /// The parts in `parts` merged in order, as bytes.
 #[pyfunction]
 pub fn merge_stats<'py>(py: Python<'py>, parts: Vec<Vec<u8>>) -> PyResult<Bound<'py, PyBytes>> {
-    let mut merged: Option<StatsPart> = None;
-    for (k, bytes) in parts.iter().enumerate() {
-        let p = part(py, bytes, &format!("parts[{k}]"))?;
-        match merged.as_mut() {
-            Some(m) => m.merge(&p).map_err(|e| to_py(py, &e.into()))?,
-            None => merged = Some(p),
-        }
-    }
-    let merged = merged
+    let merged = merged(py, &parts, "parts")?
         .ok_or_else(|| pyo3::exceptions::PyValueError::new_err("merge_stats: no part to merge"))?;
     Ok(PyBytes::new(py, &merged.to_bytes()))
 }
