@@ -91,7 +91,8 @@ pub use inputs::same_file;
 pub use io::{InvalidSamples, IoError, Mapping, ReadOptions};
 pub use loads_scan::{LowPassScan, ScanPoint};
 pub use model::{
-    InflowCorrection, ModelError, ModelOptions, ModelStructure, RotorInertiaTerms, Workspace,
+    InflowCorrection, ModelError, ModelOptions, ModelStructure, ParamOrigin, RotorInertiaTerms,
+    Workspace,
 };
 pub use on_logs::Validation;
 pub use pipeline::{

@@ -242,3 +242,65 @@ fn added_effect_columns_survive_the_model_file() {
         expect
     );
 }
+
+/// A structure with some axes taken from another (the diagnosis's per-axis fallback to
+/// Eq. 22) predicts those axes exactly as the other and every other axis as itself, and
+/// its model file round-trips: the copies are extra parameters, the replaced columns
+/// left-out terms.
+#[test]
+fn axes_taken_from_another_structure_predict_as_it_and_round_trip() {
+    let m = model();
+    let s = &m.structure;
+    let other = m.theta();
+    // The "own" model: every coefficient 10-40 % off, so the two differ on every axis.
+    let own: Vec<f64> = (other.iter().enumerate())
+        .map(|(i, t)| t * (1.1 + 0.1 * (i % 4) as f64))
+        .collect();
+    let axes = [Axis::Fz, Axis::Mz];
+    let (c, origins) = s.with_axes_of(s, &axes, |n, a| format!("{n}@{a} (Eq. 22)"));
+    let theta: Vec<f64> = origins.iter().map(|o| o.value(&own, &other)).collect();
+    // Every parameter has a column; C_Q0 acts on M_z alone, so its own copy is gone.
+    assert_eq!(theta.len(), c.params.len());
+    assert!(c.param_id("C_Q0").is_none());
+    assert!(c.param_id("C_Q0@Mz (Eq. 22)").is_some());
+    assert!(c.param_id("C_T0").is_some() && c.param_id("C_T0@Fz (Eq. 22)").is_some());
+    let samples = [
+        state(
+            [5.0, -1.0, 0.5],
+            [0.3, -0.2, 0.1],
+            &[900.0, 950.0, 1000.0, 1050.0],
+        ),
+        state(
+            [-2.0, 3.0, -1.5],
+            [-0.5, 0.4, 0.8],
+            &[1200.0, 800.0, 1100.0, 700.0],
+        ),
+    ];
+    for x in &samples {
+        let (a, b, y) = (
+            s.predict(&own, x).unwrap(),
+            s.predict(&other, x).unwrap(),
+            c.predict(&theta, x).unwrap(),
+        );
+        for axis in Axis::ALL {
+            let i = axis as usize;
+            let expect = if axes.contains(&axis) { b[i] } else { a[i] };
+            // The same columns and values summed, perhaps in another order: 1e-12.
+            assert!(
+                (y[i] - expect).abs() <= 1e-12 * expect.abs().max(1e-9),
+                "{axis}: {} vs {expect}",
+                y[i]
+            );
+        }
+    }
+    let std: Vec<f64> = theta.iter().map(|t| t.abs() * 0.01).collect();
+    let composite = IdentifiedModel::new(quad(), c, &theta, &std);
+    let path = tmp("composite.toml");
+    composite.save(&path).unwrap();
+    let back = IdentifiedModel::load(&path).unwrap();
+    assert_eq!(back.parameters, composite.parameters);
+    for x in &samples {
+        assert_eq!(back.predict(x).unwrap(), composite.predict(x).unwrap());
+    }
+    let _ = std::fs::remove_file(&path);
+}

@@ -86,7 +86,7 @@ pub use local_effects::ground_effect_factor;
 pub use options::{InflowCorrection, ModelOptions, RotorInertiaTerms};
 pub(crate) use reuse::Reuse;
 pub use signals::{Column, ParamId, Parameter, Signal, Term, term};
-pub use structure::{ModelError, ModelStructure};
+pub use structure::{ModelError, ModelStructure, ParamOrigin};
 pub use workspace::Workspace;
 pub(crate) use workspace::row_ranges;
 

@@ -59,6 +59,26 @@ pub enum ModelError {
     },
 }
 
+/// Where a parameter of [`ModelStructure::with_axes_of`]'s result takes its value from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParamOrigin {
+    /// This parameter of the structure `with_axes_of` was called on.
+    Own(ParamId),
+    /// This parameter of the other structure (copied to one axis).
+    Other(ParamId),
+}
+
+impl ParamOrigin {
+    /// The value of the parameter: from `own` (θ of the structure `with_axes_of` was
+    /// called on) or `other` (θ of the other structure).
+    pub fn value(self, own: &[f64], other: &[f64]) -> f64 {
+        match self {
+            Self::Own(p) => own[p.index()],
+            Self::Other(p) => other[p.index()],
+        }
+    }
+}
+
 /// The Eq. 22 model of one vehicle: parameters, columns per axis and known terms.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelStructure {
@@ -243,6 +263,47 @@ impl ModelStructure {
             .collect();
         let params = used.iter().map(|&p| self.param(p).clone()).collect();
         self.with_columns(params, columns)
+    }
+
+    /// This structure with its columns on `axes` replaced by `other`'s columns there:
+    /// each parameter of `other` with a column on one of `axes` becomes a parameter of its
+    /// own on that axis, named `name(parameter name, axis)`, so that with the values the
+    /// returned origins point to the result predicts `axes` as `other` and every other
+    /// axis as this structure. Parameters left with no column are dropped; the rest keep
+    /// this structure's order, the copies follow in `axes` order. `other` must be built
+    /// for the same vehicle and options (the known terms are this structure's).
+    pub fn with_axes_of(
+        &self,
+        other: &ModelStructure,
+        axes: &[Axis],
+        name: impl Fn(&str, Axis) -> String,
+    ) -> (ModelStructure, Vec<ParamOrigin>) {
+        let own: Vec<usize> = (0..self.columns.len())
+            .filter(|&j| !axes.contains(&self.columns[j].axis))
+            .collect();
+        let mut used: Vec<ParamId> = own.iter().map(|&j| self.columns[j].param).collect();
+        used.sort_unstable();
+        used.dedup();
+        let mut structure = self.select_columns(&own);
+        let mut origins: Vec<ParamOrigin> = used.into_iter().map(ParamOrigin::Own).collect();
+        for &axis in axes {
+            for p in other.param_ids() {
+                let columns: Vec<Column> = (other.columns.iter())
+                    .filter(|c| c.axis == axis && c.param == p)
+                    .cloned()
+                    .collect();
+                if columns.is_empty() {
+                    continue;
+                }
+                let param = Parameter {
+                    name: name(&other.param(p).name, axis),
+                    unit: other.param(p).unit.clone(),
+                };
+                structure.add_parameter(param, columns);
+                origins.push(ParamOrigin::Other(p));
+            }
+        }
+        (structure, origins)
     }
 
     /// True when a column needs the slow rotor thrusts (a trim-moment term), which only
