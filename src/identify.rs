@@ -48,6 +48,7 @@
 //! # }
 //! ```
 
+use std::borrow::Cow;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
@@ -59,7 +60,7 @@ use crate::estimate::{self, AxisMetrics, FitOptions};
 use crate::identified::IdentifiedModel;
 use crate::io::{IoError, Mapping, ReadOptions};
 use crate::loads_scan::LowPassScan;
-use crate::model::{ModelOptions, ModelStructure, ParamId, Workspace};
+use crate::model::{ModelOptions, ModelStructure, ParamId, ParamOrigin, Workspace};
 use crate::pipeline::{
     self, FitOutcome, FitRequest, Holdout, PassPlan, PendingFit, PlannedFit, PreparedPass,
     RemainderPart, StatsPart,
@@ -534,22 +535,29 @@ impl Results {
     /// one), over all parameters of [`Results::structure`] in order; rows and columns
     /// of dropped parameters are zero. Units: products of the parameters' units.
     pub fn covariance(&self) -> DMatrix<f64> {
-        let mmr = &self.estimation().mmr;
-        let n = self.structure().params.len();
-        let k = mmr.param_index.len();
-        let kappa = self.variance_inflation().max(1.0);
-        let mut c = DMatrix::zeros(n, n);
-        for (a, &i) in mmr.param_index.iter().enumerate() {
-            for (b, &j) in mmr.param_index.iter().enumerate() {
-                c[(i.index(), j.index())] = kappa * mmr.covariance[a * k + b];
-            }
-        }
-        c
+        corrected_covariance(
+            self.estimation(),
+            self.structure().params.len(),
+            self.variance_inflation(),
+        )
     }
 
-    /// Goodness of fit of the final model on all fit data, per axis.
+    /// Goodness of fit of the adopted model on all fit data, per axis: the final model's,
+    /// and the Eq. 22 model's on the axes it predicts
+    /// ([`crate::internals::diagnose::Eq22Axes`]).
     pub fn fit_metrics(&self) -> [AxisMetrics; 6] {
-        self.estimation().metrics
+        let mut metrics = self.estimation().metrics;
+        if let Some(e) = self
+            .outcome
+            .diagnosis
+            .as_ref()
+            .and_then(|d| d.eq22.as_ref())
+        {
+            for &axis in &e.axes {
+                metrics[axis as usize] = e.fit.metrics[axis as usize];
+            }
+        }
+        metrics
     }
 
     /// Goodness of fit of the final model on data it was not fitted to: the
@@ -586,12 +594,25 @@ impl Results {
         })
     }
 
-    /// The final model's output for every sample of `chunk` per axis (N, N m).
+    /// The adopted model's output for every sample of `chunk` per axis (N, N m): the
+    /// final model's, and the Eq. 22 model's on the axes it predicts better
+    /// ([`crate::internals::diagnose::Eq22Axes`]).
     pub fn fitted(&self, chunk: &SampleChunk) -> Result<[Vec<f64>; 6], Error> {
+        let (structure, theta) = self.adopted();
         let mut ws = Workspace::default();
-        Ok(self
-            .structure()
-            .predict_chunk(self.theta(), chunk, &mut ws)?)
+        Ok(structure.predict_chunk(&theta, chunk, &mut ws)?)
+    }
+
+    /// The adopted model's structure and θ̂: the final model's, with the axes of
+    /// [`crate::internals::diagnose::Eq22Axes`] predicted by the Eq. 22 model.
+    fn adopted(&self) -> (Cow<'_, ModelStructure>, Cow<'_, [f64]>) {
+        match &self.outcome.diagnosis {
+            Some(d) if d.eq22.is_some() => {
+                let (structure, theta) = d.adopted_theta();
+                (Cow::Owned(structure), Cow::Owned(theta))
+            }
+            _ => (Cow::Borrowed(self.structure()), Cow::Borrowed(self.theta())),
+        }
     }
 
     /// Measured minus fitted output for every sample of `chunk` per axis (N, N m).
@@ -664,8 +685,7 @@ impl Results {
     /// The final model as equations, one per axis: `Fx [N] = θ·regressor + …`, with
     /// the estimates in place of θ (known terms, moved to the output side, noted).
     pub fn equations(&self) -> String {
-        let structure = self.structure();
-        let theta = self.theta();
+        let (structure, theta) = self.adopted();
         let mut out = String::new();
         for axis in Axis::ALL {
             let mut line = format!("{axis} [{}] =", axis.unit());
@@ -705,20 +725,62 @@ impl Results {
         out
     }
 
-    /// The final model, ready to save, load and predict with: estimates, the
-    /// coloured-corrected σ, and the coloured-corrected covariance.
+    /// The adopted model, ready to save, load and predict with: estimates, the
+    /// coloured-corrected σ, and the coloured-corrected covariance. On the axes the
+    /// Eq. 22 model predicts better ([`crate::internals::diagnose::Eq22Axes`]) its parameters are
+    /// the Eq. 22 model's, copied to those axes (named `<parameter>@<axis> (Eq. 22)`);
+    /// the covariance between them and the final model's parameters is left at zero, which
+    /// no axis's prediction uses (each axis uses one of the two sets).
     pub fn to_identified_model(&self) -> IdentifiedModel {
-        let n = self.structure().params.len();
-        let cov = self.covariance();
-        let std: Vec<f64> = (0..n).map(|i| cov[(i, i)].sqrt()).collect();
-        let mut model = IdentifiedModel::new(
-            self.vehicle.clone(),
-            self.structure().clone(),
-            self.theta(),
-            &std,
-        )
-        .with_covariance(cov);
+        let (structure, theta, cov) = match &self.outcome.diagnosis {
+            Some(d) if d.eq22.is_some() => {
+                let (structure, origins) = d.adopted();
+                let (_, theta) = d.adopted_theta();
+                let own = self.covariance();
+                let eq22 = d.eq22.as_ref().map(|e| {
+                    corrected_covariance(
+                        &e.fit,
+                        e.structure.params.len(),
+                        self.variance_inflation(),
+                    )
+                });
+                let cov = DMatrix::from_fn(origins.len(), origins.len(), |i, j| {
+                    match (origins[i], origins[j]) {
+                        (ParamOrigin::Own(a), ParamOrigin::Own(b)) => own[(a.index(), b.index())],
+                        (ParamOrigin::Other(a), ParamOrigin::Other(b)) => {
+                            eq22.as_ref().map_or(0.0, |c| c[(a.index(), b.index())])
+                        }
+                        _ => 0.0,
+                    }
+                });
+                (structure, theta, cov)
+            }
+            _ => (
+                self.structure().clone(),
+                self.theta().to_vec(),
+                self.covariance(),
+            ),
+        };
+        let std: Vec<f64> = (0..theta.len()).map(|i| cov[(i, i)].sqrt()).collect();
+        let mut model = IdentifiedModel::new(self.vehicle.clone(), structure, &theta, &std)
+            .with_covariance(cov);
         model.loads_low_pass_hz = self.loads_low_pass_hz;
         model
     }
+}
+
+/// The parameter covariance of `fit` with the coloured-residual correction (κ =
+/// `variance_inflation`, at least 1, times the white one) over the `n` parameters of its
+/// structure; rows and columns of dropped parameters are zero.
+fn corrected_covariance(fit: &estimate::Fit, n: usize, variance_inflation: f64) -> DMatrix<f64> {
+    let mmr = &fit.mmr;
+    let k = mmr.param_index.len();
+    let kappa = variance_inflation.max(1.0);
+    let mut c = DMatrix::zeros(n, n);
+    for (a, &i) in mmr.param_index.iter().enumerate() {
+        for (b, &j) in mmr.param_index.iter().enumerate() {
+            c[(i.index(), j.index())] = kappa * mmr.covariance[a * k + b];
+        }
+    }
+    c
 }

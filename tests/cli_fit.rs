@@ -393,14 +393,15 @@ fn bad_input_exits_2_with_a_message_naming_the_file_and_no_output() {
     assert_eq!(mrsysid(&["fit"]).status.code(), Some(2));
 }
 
-/// Fits the shipped NeuroBEM segments `logs` (paths after `data/neurobem/`, with any
-/// `--validate` in between) through the shipped vehicle and mapping; the JSON report.
+/// Fits the shipped NeuroBEM segments `logs` (paths after `data/neurobem/`, or absolute
+/// paths, with options such as `--validate` in between) through the shipped vehicle and
+/// mapping; the JSON report.
 fn fit_neurobem(name: &str, logs: &[&str]) -> serde_json::Value {
     let report = tmp(&format!("{name}.json"));
     let paths: Vec<String> = logs
         .iter()
         .map(|l| {
-            if l.starts_with("--") {
+            if l.starts_with("--") || Path::new(l).is_absolute() {
                 l.to_string()
             } else {
                 format!("data/neurobem/{l}")
@@ -510,12 +511,21 @@ fn real_neurobem_validation_logs_are_for_reporting_only() {
     // race track reproduces the diagnosis' "after" figures (1e-9: the same statistics
     // accumulated in another order).
     assert!(!d["unsupported"].as_array().unwrap().is_empty());
-    let metrics = tmp("neurobem_rotation_validate.json");
+    let saved = validated_r2(&model, &format!("data/neurobem/{RACETRACK}"), "rotation");
+    for (axis, r2) in saved.iter().enumerate() {
+        assert!((r2 - val("after", axis)).abs() < 1e-9, "axis {axis}: {r2}");
+    }
+}
+
+/// R² per axis, Fx…Mz, of `mrsysid validate` with the saved `model` on the NeuroBEM
+/// `log` (through the shipped mapping); `name` tells the scratch files apart.
+fn validated_r2(model: &Path, log: &str, name: &str) -> Vec<f64> {
+    let metrics = tmp(&format!("{name}_validate.json"));
     let out = mrsysid(&[
         "validate",
         "--model",
         model.to_str().unwrap(),
-        &format!("data/neurobem/{RACETRACK}"),
+        log,
         "--mapping",
         "examples/neurobem.toml",
         "--json",
@@ -527,12 +537,74 @@ fn real_neurobem_validation_logs_are_for_reporting_only() {
         String::from_utf8_lossy(&out.stderr)
     );
     let m = json(&metrics);
-    for axis in 0..6 {
-        let saved = m["axes"][axis]["r2"].as_f64().unwrap();
-        assert!(
-            (saved - val("after", axis)).abs() < 1e-9,
-            "axis {axis}: {saved}"
-        );
+    (0..6)
+        .map(|axis| m["axes"][axis]["r2"].as_f64().unwrap())
+        .collect()
+}
+
+/// The shipped NeuroBEM segment `log` cut in two contract-free CSV files in the scratch
+/// directory: its first `share` of samples and the rest, each with the header.
+fn split_neurobem(log: &str, share: f64) -> (PathBuf, PathBuf) {
+    use std::io::Read;
+    let mut text = String::new();
+    flate2::read::GzDecoder::new(std::fs::File::open(format!("data/neurobem/{log}")).unwrap())
+        .read_to_string(&mut text)
+        .unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.collect();
+    let k = (rows.len() as f64 * share) as usize;
+    let write = |name: &str, rows: &[&str]| {
+        let path = tmp(name);
+        std::fs::write(&path, format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+        path
+    };
+    let stem = log.split('_').next().unwrap();
+    (
+        write(&format!("{stem}_first.csv"), &rows[..k]),
+        write(&format!("{stem}_last.csv"), &rows[k..]),
+    )
+}
+
+#[test]
+fn an_axis_the_final_model_predicts_worse_is_predicted_by_eq22() {
+    // The race track fitted on its first 80 % and validated on its last 20 %, with the
+    // documented NeuroBEM options. Measured: the final model predicts the held-out
+    // blocks' M_z worse than Eq. 22 (pooled R² 5.7 % -> 5.1 %), and the flight's future
+    // too (20.9 % -> 10.0 %). The adopted model predicts M_z with the Eq. 22 model, so
+    // there it equals Eq. 22 exactly (on the blocks and on the validation log), and the
+    // saved model reproduces the adopted model on every axis (1e-9: the same
+    // statistics accumulated in another order).
+    let (first, last) = split_neurobem(RACETRACK, 0.8);
+    let model = tmp("eq22_axes_model.toml");
+    let model_out = format!("--model-out={}", model.display());
+    let v = fit_neurobem(
+        "eq22_axes",
+        &[
+            first.to_str().unwrap(),
+            "--validate",
+            last.to_str().unwrap(),
+            "--rotor-inertia=estimated",
+            &model_out,
+        ],
+    );
+    let d = &v["diagnosis"];
+    let eq22 = d["eq22_axes"]
+        .as_array()
+        .expect("an axis falls back to Eq. 22");
+    let axes: Vec<&str> = eq22.iter().map(|e| e["axis"].as_str().unwrap()).collect();
+    assert_eq!(axes, ["Mz"]);
+    let held_out = |part: &str| axis_metric(d, part, "Mz", "rmse");
+    assert_eq!(held_out("after"), held_out("before"));
+    assert!(eq22[0]["final_held_out"]["rmse"].as_f64().unwrap() > held_out("before"));
+    let val = |part: &str, axis: usize| d["validation"][part][axis]["r2"].as_f64().unwrap();
+    assert_eq!(val("after", 5), val("before", 5));
+    let final_val = eq22[0]["final_validation"]["r2"].as_f64().unwrap();
+    assert!(final_val < val("before", 5), "{final_val}");
+    let saved = validated_r2(&model, last.to_str().unwrap(), "eq22_axes");
+    for (axis, r2) in saved.iter().enumerate() {
+        let after = val("after", axis);
+        assert!((r2 - after).abs() < 1e-9, "axis {axis}: {r2} vs {after}");
     }
 }
 

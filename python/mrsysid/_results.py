@@ -113,8 +113,9 @@ class Results:
         ``r2`` (centred R²), ``rmse`` (N or N m), ``nrmse`` and ``tic``. ``data`` is
         ``fit`` (all fit data), ``cross-validated`` (every fold's held-out predictions
         pooled) or ``validation`` (the validation logs, when given); ``stage`` is
-        ``before`` (the Eq. 22 model) or ``after`` (the final model, when the diagnosis
-        ran)."""
+        ``before`` (the Eq. 22 model) or ``after`` (the adopted model, when the
+        diagnosis ran: the final model, with the Eq. 22 model on any axis whose held-out
+        data the final model predicted worse, ``eq22_axes`` of the report)."""
         rows = self._native.metrics()
         frame = pd.DataFrame(
             rows, columns=["data", "stage", "axis", "r2", "rmse", "nrmse", "tic"]

@@ -66,12 +66,13 @@ impl Results {
     /// Goodness of fit per axis as rows `(data, stage, axis, r2, rmse, nrmse, tic)`:
     /// data `fit` (all fit data), `cross-validated` (every fold's held-out predictions
     /// pooled) and, with validation logs, `validation`; stage `before` (the Eq. 22
-    /// model) and, when the diagnosis ran, `after` (the final model).
+    /// model) and, when the diagnosis ran, `after` (the adopted model: the final model,
+    /// with the Eq. 22 model on the axes it predicts better, `eq22_axes` of the report).
     fn metrics(&self) -> Vec<MetricsRow> {
         let o = self.inner.outcome();
         let mut out = rows("fit", "before", &o.fit.metrics);
-        if let Some(d) = &o.diagnosis {
-            out.extend(rows("fit", "after", &d.fit.metrics));
+        if o.diagnosis.is_some() {
+            out.extend(rows("fit", "after", &self.inner.fit_metrics()));
         }
         out.extend(rows(
             "cross-validated",

@@ -26,6 +26,6 @@ pub use generic::{SCREENING_SAMPLES, Thinned};
 pub use options::DiagnoseOptions;
 pub use procedure::{
     CandidateScore, CandidateStatistics, DiagnoseError, Diagnosis, DiagnosisStep, EffectParameter,
-    Rejection, Unsupported, diagnose, diagnose_on_threads,
+    Eq22Axes, Rejection, Unsupported, diagnose, diagnose_on_threads,
 };
 pub use set::{CandidateSet, candidate_set, candidate_set_on_threads};

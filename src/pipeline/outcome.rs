@@ -20,8 +20,9 @@ pub struct PlotSeries {
     pub measured: [Vec<f64>; 6],
     /// The Eq. 22 model's output per axis (N, N m).
     pub predicted: [Vec<f64>; 6],
-    /// The final (diagnosed) model's output per axis (N, N m); empty when the diagnosis
-    /// did not run.
+    /// The adopted model's output per axis (N, N m): the final (diagnosed) model's, the
+    /// Eq. 22 model's on the axes it predicts better; empty when the diagnosis did not
+    /// run.
     pub final_predicted: [Vec<f64>; 6],
     /// Per effect the diagnosis added, on the axis it improved most: its load against
     /// the residual it explains (a partial-residual plot). Empty without the diagnosis.
@@ -58,7 +59,7 @@ impl PlotSeries {
     }
 
     /// Fills [`PlotSeries::final_predicted`] and [`PlotSeries::effects`] from the
-    /// diagnosis `d`: the final model's output at the samples kept, and each added
+    /// diagnosis `d`: the adopted model's output at the samples kept, and each added
     /// effect's load (the final model's output less its output with the effect's
     /// parameters set to zero).
     pub(crate) fn predict_final(&mut self, d: &Diagnosis) -> Result<(), ModelError> {
@@ -107,7 +108,13 @@ impl PlotSeries {
                 after: measured.iter().zip(&full[a]).map(|(z, f)| z - f).collect(),
             });
         }
-        self.final_predicted = full;
+        self.final_predicted = match &d.eq22 {
+            Some(_) => {
+                let (structure, theta) = d.adopted_theta();
+                structure.predict_chunk(&theta, &self.samples, &mut Workspace::default())?
+            }
+            None => full,
+        };
         self.effects = effects;
         Ok(())
     }

@@ -180,15 +180,28 @@ pub struct DiagnosisReport {
     /// rotor signals over lags (time series only).
     #[serde(default)]
     pub remainder: Vec<AxisRemainder>,
-    /// Axes on which the final model predicts the held-out data (all folds pooled) worse
-    /// than the Eq. 22 model (`Diagnosis::worse_than_base`); absent when there are none.
+    /// Axes the adopted model predicts with the Eq. 22 model, because the final model
+    /// predicted their held-out data (all folds pooled) worse (`Diagnosis::eq22`); absent
+    /// when there are none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub worse_than_base: Vec<Axis>,
-    /// Axes on which the final model predicts the reporting-only validation logs worse
+    pub eq22_axes: Vec<Eq22AxisRow>,
+    /// Axes on which the adopted model predicts the reporting-only validation logs worse
     /// than the Eq. 22 model (`Diagnosis::worse_on_validation`); absent when there are
     /// none or no validation log was given.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub worse_on_validation: Vec<Axis>,
+}
+
+/// An axis the adopted model predicts with the Eq. 22 model, with what the final model
+/// reached there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Eq22AxisRow {
+    /// The axis.
+    pub axis: Axis,
+    /// The final model's cross-validated metrics on it (all folds pooled).
+    pub final_held_out: AxisRow,
+    /// The final model's metrics on it on the validation logs, when given.
+    pub final_validation: Option<AxisRow>,
 }
 
 /// An effect (candidate) with its estimates.
@@ -379,7 +392,16 @@ impl From<&Diagnosis> for DiagnosisReport {
             findings: d.findings.clone(),
             stopped_at_limit: d.stopped_at_limit,
             remainder: d.remainder.clone(),
-            worse_than_base: d.worse_than_base(),
+            eq22_axes: d.eq22.as_ref().map_or_else(Vec::new, |e| {
+                (e.axes.iter().enumerate())
+                    .map(|(i, &axis)| Eq22AxisRow {
+                        axis,
+                        final_held_out: AxisRow::from(&e.final_held_out[i]),
+                        final_validation: (e.final_validation.as_ref())
+                            .map(|v| AxisRow::from(&v[i])),
+                    })
+                    .collect()
+            }),
             worse_on_validation: d.worse_on_validation(),
         }
     }

@@ -154,16 +154,22 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
     for r in &d.remainder {
         let _ = writeln!(out, "  what is left: {}", r.sentence());
     }
-    for axis in &d.worse_than_base {
-        let (b, a) = (axis_row(&d.before, *axis), axis_row(&d.after, *axis));
-        let _ = writeln!(
-            out,
-            "  worse than the Eq. 22 model on the held-out {} data: R2 {:.1}% -> {:.1}% (the \
-             terms added and left out pay on all axes together)",
-            axis.name(),
-            100.0 * b.map_or(f64::NAN, |r| r.r2),
-            100.0 * a.map_or(f64::NAN, |r| r.r2)
+    for e in &d.eq22_axes {
+        let b = axis_row(&d.before, e.axis).map_or(f64::NAN, |r| 100.0 * r.r2);
+        let mut line = format!(
+            "  {} predicted by the Eq. 22 model: the final model predicted its held-out data \
+             worse (R2 {b:.1}% -> {:.1}%",
+            e.axis.name(),
+            100.0 * e.final_held_out.r2
         );
+        if let (Some(f), Some(v)) = (&e.final_validation, &d.validation) {
+            let vb = axis_row(&v.before, e.axis).map_or(f64::NAN, |r| 100.0 * r.r2);
+            line.push_str(&format!(
+                "; on the validation logs {vb:.1}% -> {:.1}%",
+                100.0 * f.r2
+            ));
+        }
+        let _ = writeln!(out, "{line})");
     }
     if let Some(v) = &d.validation {
         for axis in &d.worse_on_validation {

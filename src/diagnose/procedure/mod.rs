@@ -86,14 +86,22 @@
 //! supported by these data". Control-effectiveness terms
 //! ([`crate::model::ModelStructure::is_control_effectiveness`]) are never left out.
 //!
+//! **Eq. 22 where it predicts better.** An axis whose held-out data (all folds pooled)
+//! the final model predicts worse than the Eq. 22 model is predicted by the Eq. 22
+//! model in the adopted model (`eq22_axes`): the MMR couples the axes through shared
+//! parameters, so additions that pay on some axes can cost another a little, and each
+//! axis's prediction is its own columns' sum. The report names such axes.
+//!
 //! The parts, one file each: `outcome` (what the procedure returns), `trial` (a
 //! sub-model's fit, cross-validation and tests), `score` (the acceptance rules for one
 //! candidate), `state` (the search's current model and what it has tried), `search`
 //! (the forward search, with withdrawals and forms chosen again),
 //! `alternatives` (look-alikes, and candidates not separable from the winner),
-//! `parsimony` (terms left out at the end), `findings` (one sentence per effect).
+//! `parsimony` (terms left out at the end), `eq22_axes` (the per-axis fallback to Eq.
+//! 22), `findings` (one sentence per effect).
 
 mod alternatives;
+mod eq22_axes;
 mod findings;
 mod outcome;
 mod parsimony;
@@ -104,7 +112,7 @@ mod trial;
 
 pub use super::options::DiagnoseOptions;
 pub use outcome::{
-    CandidateScore, DiagnoseError, Diagnosis, DiagnosisStep, EffectParameter, Rejection,
+    CandidateScore, DiagnoseError, Diagnosis, DiagnosisStep, EffectParameter, Eq22Axes, Rejection,
     Unsupported,
 };
 pub use search::{diagnose, diagnose_on_threads};

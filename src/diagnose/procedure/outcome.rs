@@ -7,7 +7,7 @@ use crate::estimate::remainder::AxisRemainder;
 
 use crate::diagnose::candidate::{EffectKind, Reading, Role};
 use crate::estimate::{AxisMetrics, EstimateError, Fit};
-use crate::model::ModelStructure;
+use crate::model::{ModelStructure, ParamOrigin};
 use crate::sample::Axis;
 use crate::stats::AccumulateError;
 
@@ -213,7 +213,8 @@ pub struct Diagnosis {
     pub folds: Vec<String>,
     /// Cross-validated metrics of the base model, all folds pooled.
     pub before: [AxisMetrics; 6],
-    /// Cross-validated metrics of the final model, all folds pooled.
+    /// Cross-validated metrics of the adopted model (the final model, predicting the axes
+    /// of [`Diagnosis::eq22`] with Eq. 22), all folds pooled.
     pub after: [AxisMetrics; 6],
     /// Cross-validated metrics (all folds pooled) of the final model without its
     /// unspecific terms (freed coefficients, generic terms): what the named mechanisms
@@ -221,11 +222,14 @@ pub struct Diagnosis {
     pub named_only: Option<[AxisMetrics; 6]>,
     /// Per fold, the base model's metrics.
     pub before_folds: Vec<[AxisMetrics; 6]>,
-    /// Per fold, the final model's metrics.
+    /// Per fold, the adopted model's metrics.
     pub after_folds: Vec<[AxisMetrics; 6]>,
-    /// Base and final model (each fitted on all fit data) on the reporting-only
+    /// Base and adopted model (each fitted on all fit data) on the reporting-only
     /// validation data, when given: no decision saw these data.
     pub validation: Option<[[AxisMetrics; 6]; 2]>,
+    /// The axes the adopted model predicts with the Eq. 22 model, because the final model
+    /// predicted their held-out data worse; `None` when there are none.
+    pub eq22: Option<Eq22Axes>,
     /// What is left in each moment axis's residual of the final model: its correlation
     /// with the axis's rotor signals over lags (filled in by the fit pipeline on time
     /// series; empty otherwise).
@@ -247,18 +251,60 @@ pub struct Diagnosis {
     pub fit: Fit,
 }
 
+/// The axes on which the final model predicts the held-out data (all folds pooled) worse
+/// than the Eq. 22 model, beyond rounding (RMSE higher by more than 1e-9, relative). The
+/// additions and removals are chosen on all axes together, through parameters the axes
+/// share, so one axis can lose a little while the others gain much: the adopted model
+/// predicts such an axis with the Eq. 22 model, which the held-out data favour there.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Eq22Axes {
+    /// The axes, in [`Axis`] order.
+    pub axes: Vec<Axis>,
+    /// The final model's cross-validated metrics on them (all folds pooled).
+    pub final_held_out: Vec<AxisMetrics>,
+    /// The final model's metrics on them on the reporting-only validation data, when
+    /// given.
+    pub final_validation: Option<Vec<AxisMetrics>>,
+    /// The Eq. 22 model's structure.
+    #[serde(skip)]
+    pub structure: ModelStructure,
+    /// The Eq. 22 model's estimation on all fit data.
+    #[serde(skip)]
+    pub fit: Fit,
+}
+
+/// How the adopted model names the Eq. 22 parameter `name` copied to `axis`.
+fn eq22_copy_name(name: &str, axis: Axis) -> String {
+    format!("{name}@{axis} (Eq. 22)")
+}
+
 impl Diagnosis {
-    /// Axes on which the final model predicts the held-out data (all folds pooled) worse
-    /// than the base (Eq. 22) model, beyond rounding (RMSE higher by more than 1e-9,
-    /// relative). The additions and removals are chosen on all axes together, so one
-    /// axis can lose a little while the others gain much: the report says so, never
-    /// silently.
-    pub fn worse_than_base(&self) -> Vec<Axis> {
-        worse_axes(&self.before, &self.after)
+    /// The adopted model: the final model ([`Diagnosis::structure`]) with its columns on
+    /// the [`Diagnosis::eq22`] axes replaced by the Eq. 22 model's, each Eq. 22 parameter
+    /// there a parameter of its own, `<parameter>@<axis> (Eq. 22)`; and where each of its
+    /// parameters takes its value from (own: the final model's θ̂, other: Eq. 22's).
+    pub fn adopted(&self) -> (ModelStructure, Vec<ParamOrigin>) {
+        match &self.eq22 {
+            Some(e) => self
+                .structure
+                .with_axes_of(&e.structure, &e.axes, eq22_copy_name),
+            None => (
+                self.structure.clone(),
+                self.structure.param_ids().map(ParamOrigin::Own).collect(),
+            ),
+        }
     }
 
-    /// The same on the reporting-only validation logs, when given: axes their data are
-    /// predicted worse by the final model than by the Eq. 22 model.
+    /// The adopted model ([`Diagnosis::adopted`]) and its θ̂.
+    pub fn adopted_theta(&self) -> (ModelStructure, Vec<f64>) {
+        let (structure, origins) = self.adopted();
+        let eq22 = self.eq22.as_ref().map_or(&[][..], |e| &e.fit.mmr.theta[..]);
+        let theta = origins.iter().map(|o| o.value(&self.theta, eq22)).collect();
+        (structure, theta)
+    }
+
+    /// Axes on which the adopted model predicts the reporting-only validation logs, when
+    /// given, worse than the Eq. 22 model: no decision saw these data.
     pub fn worse_on_validation(&self) -> Vec<Axis> {
         self.validation
             .as_ref()
@@ -267,7 +313,7 @@ impl Diagnosis {
 }
 
 /// Axes whose RMSE is higher `after` than `before` beyond rounding (1e-9 relative).
-fn worse_axes(before: &[AxisMetrics], after: &[AxisMetrics]) -> Vec<Axis> {
+pub(super) fn worse_axes(before: &[AxisMetrics], after: &[AxisMetrics]) -> Vec<Axis> {
     before
         .iter()
         .zip(after)

@@ -4,6 +4,7 @@
 //! the parsimony pass.
 
 use super::alternatives::likeliest_in_band;
+use super::eq22_axes::fall_back_to_eq22;
 use super::findings::{describe, finding};
 use super::outcome::{CandidateScore, DiagnoseError, Diagnosis, DiagnosisStep, Rejection};
 use super::parsimony::prune;
@@ -117,7 +118,8 @@ pub fn diagnose_on_threads(
         SingularValues::Always,
     )?;
     estimate::add_fsoa_tables(&mut fit, &current.structure, &fitted, fit_options)?;
-    Ok(Diagnosis {
+    let before_folds = fold_metrics(&base.cv);
+    let mut diagnosis = Diagnosis {
         steps,
         findings: in_model.iter().map(|(_, _, said)| said.clone()).collect(),
         effects_added: in_model.into_iter().map(|(_, s, _)| s).collect(),
@@ -127,16 +129,19 @@ pub fn diagnose_on_threads(
         before: base.cv.pooled_metrics(),
         after: current.cv.pooled_metrics(),
         named_only,
-        before_folds: fold_metrics(&base.cv),
+        before_folds,
         after_folds: fold_metrics(&current.cv),
         validation,
+        eq22: None,
         remainder: Vec::new(),
         theta: fit.mmr.theta.clone(),
         std: current.std,
         structure: current.structure,
         columns: current.columns,
         fit,
-    })
+    };
+    fall_back_to_eq22(&mut diagnosis, base);
+    Ok(diagnosis)
 }
 
 /// The cross-validated metrics of `current` without the columns of its unspecific
