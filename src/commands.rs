@@ -293,6 +293,9 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
             "Validation data: measured vs Eq. 22 model",
         )
     };
+    let eq22_axes = (out.diagnosis.as_ref())
+        .and_then(|d| d.eq22.as_ref())
+        .map_or_else(Vec::new, |e| e.axes.clone());
     for (name, title, s) in [
         (fit_histories, fit_title, &out.fit_series),
         (
@@ -315,6 +318,7 @@ fn write_plots(dir: &Path, out: &FitOutcome) -> Result<(), plots::PlotError> {
                     predicted: &s.predicted[a],
                     final_model: (!s.final_predicted[a].is_empty())
                         .then_some(s.final_predicted[a].as_slice()),
+                    final_is_eq22: eq22_axes.contains(&axis),
                 }
             })
             .collect();

@@ -54,6 +54,7 @@ fn time_histories_render() {
             measured: &z[axis as usize],
             predicted: &y[axis as usize],
             final_model: Some(&z[axis as usize]),
+            final_is_eq22: axis == Axis::Mz,
         })
         .collect();
     let dir = out_dir("time");

@@ -33,9 +33,12 @@ pub struct AxisSeries<'a> {
     pub measured: &'a [f64],
     /// The Eq. 22 model's output (N or N m).
     pub predicted: &'a [f64],
-    /// The final (diagnosed) model's output (N or N m), drawn beside the Eq. 22 model's
-    /// when given.
+    /// The adopted (diagnosed) model's output (N or N m), drawn beside the Eq. 22
+    /// model's when given.
     pub final_model: Option<&'a [f64]>,
+    /// The adopted model predicts this axis with the Eq. 22 model (the final model
+    /// predicted its held-out data worse): the legend says so.
+    pub final_is_eq22: bool,
 }
 
 /// Residual distribution of one axis: histogram as densities and the fitted Gaussian.
@@ -288,7 +291,15 @@ fn draw_time_histories<DB: DrawingBackend>(
         let lines = [
             (s.measured, BLACK, "measured"),
             (s.predicted, RED, "Eq. 22 model"),
-            (final_model, BLUE, "final model"),
+            (
+                final_model,
+                BLUE,
+                if s.final_is_eq22 {
+                    "final model (Eq. 22 here)"
+                } else {
+                    "final model"
+                },
+            ),
         ];
         for (values, colour, label) in lines.into_iter().filter(|l| !l.0.is_empty()) {
             let points = decimate(s.t, values);
