@@ -468,7 +468,9 @@ impl Results {
     }
 
     /// The final model's structure: the diagnosed one (effects added, unsupported terms
-    /// left out) when the diagnosis ran, else Eq. 22.
+    /// left out) when the diagnosis ran, else Eq. 22. The adopted model, which predicts
+    /// with Eq. 22 any axis whose held-out data the final model predicted worse
+    /// ([`crate::internals::diagnose::Eq22Axes`]), is [`Results::to_identified_model`]'s.
     pub fn structure(&self) -> &ModelStructure {
         match &self.outcome.diagnosis {
             Some(d) => &d.structure,
