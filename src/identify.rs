@@ -734,30 +734,26 @@ impl Results {
     /// the covariance between them and the final model's parameters is left at zero, which
     /// no axis's prediction uses (each axis uses one of the two sets).
     pub fn to_identified_model(&self) -> IdentifiedModel {
-        let (structure, theta, cov) = match &self.outcome.diagnosis {
-            Some(d) if d.eq22.is_some() => {
+        let diagnosis = self.outcome.diagnosis.as_ref();
+        let (structure, theta, cov) = match diagnosis.and_then(|d| Some((d, d.eq22.as_ref()?))) {
+            Some((d, e)) => {
                 let (structure, origins) = d.adopted();
-                let (_, theta) = d.adopted_theta();
+                let theta = d.adopted_values(&origins);
                 let own = self.covariance();
-                let eq22 = d.eq22.as_ref().map(|e| {
-                    corrected_covariance(
-                        &e.fit,
-                        e.structure.params.len(),
-                        self.variance_inflation(),
-                    )
-                });
+                let inflation = self.variance_inflation();
+                let eq22 = corrected_covariance(&e.fit, e.structure.params.len(), inflation);
                 let cov = DMatrix::from_fn(origins.len(), origins.len(), |i, j| {
                     match (origins[i], origins[j]) {
                         (ParamOrigin::Own(a), ParamOrigin::Own(b)) => own[(a.index(), b.index())],
                         (ParamOrigin::Other(a), ParamOrigin::Other(b)) => {
-                            eq22.as_ref().map_or(0.0, |c| c[(a.index(), b.index())])
+                            eq22[(a.index(), b.index())]
                         }
                         _ => 0.0,
                     }
                 });
                 (structure, theta, cov)
             }
-            _ => (
+            None => (
                 self.structure().clone(),
                 self.theta().to_vec(),
                 self.covariance(),

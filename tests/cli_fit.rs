@@ -49,14 +49,17 @@ fn first_effect(diagnosis: &serde_json::Value) -> &serde_json::Value {
 
 /// Estimate of parameter `name` of an effect row.
 fn effect_parameter(effect: &serde_json::Value, name: &str) -> f64 {
+    parameter_row(effect, name)["estimate"].as_f64().unwrap()
+}
+
+/// The row of parameter `name` of an `effects_added` entry.
+fn parameter_row<'a>(effect: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
     effect["parameters"]
         .as_array()
         .unwrap()
         .iter()
         .find(|p| p["name"] == name)
-        .unwrap()["estimate"]
-        .as_f64()
-        .unwrap()
+        .unwrap_or_else(|| panic!("no parameter {name} in {effect}"))
 }
 
 /// Simulates a 30 s quad× flight logged at 100 Hz with `extra` simulate arguments, fits
@@ -647,12 +650,7 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
     let first = first_effect(d);
     assert_eq!(first["name"], "CG offset");
     let final_estimate = |name: &str| {
-        first["parameters"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| p["name"] == name)
-            .unwrap()["final_estimate"]
+        parameter_row(first, name)["final_estimate"]
             .as_f64()
             .unwrap()
     };

@@ -295,11 +295,17 @@ impl Diagnosis {
         }
     }
 
+    /// The values of the adopted model's parameters with `origins` (from
+    /// [`Diagnosis::adopted`]): the final model's θ̂ and the Eq. 22 model's.
+    pub fn adopted_values(&self, origins: &[ParamOrigin]) -> Vec<f64> {
+        let eq22 = self.eq22.as_ref().map_or(&[][..], |e| &e.fit.mmr.theta[..]);
+        origins.iter().map(|o| o.value(&self.theta, eq22)).collect()
+    }
+
     /// The adopted model ([`Diagnosis::adopted`]) and its θ̂.
     pub fn adopted_theta(&self) -> (ModelStructure, Vec<f64>) {
         let (structure, origins) = self.adopted();
-        let eq22 = self.eq22.as_ref().map_or(&[][..], |e| &e.fit.mmr.theta[..]);
-        let theta = origins.iter().map(|o| o.value(&self.theta, eq22)).collect();
+        let theta = self.adopted_values(&origins);
         (structure, theta)
     }
 
