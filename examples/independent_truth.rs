@@ -6,9 +6,12 @@
 //! beyond what the clean set of the same seed gets.
 //!
 //! ```text
-//! cargo run --release --example independent_truth [-- SEEDS [CASE-FILTER]]
+//! cargo run --release --example independent_truth [-- [--other-values] SEEDS [CASE-FILTER]]
 //! cargo run --release --example independent_truth -- 10 'flight, CG'
 //! ```
+//!
+//! `--other-values` runs the same five kinds at other values, sizes and places
+//! ([`Hidden::others`]: not the values the harness was first run with).
 
 #[path = "../tests/independent/mod.rs"]
 mod independent;
@@ -16,6 +19,7 @@ mod independent;
 use std::collections::HashMap;
 use std::time::Instant;
 
+use independent::effects::Hidden;
 use independent::score::{
     Case, DataKind, Naming, Score, cases, data, diagnose, effect_size, expected_kind, score,
     vehicle,
@@ -37,11 +41,17 @@ struct Tally {
 }
 
 fn main() {
-    let mut args = std::env::args().skip(1);
+    let all_args: Vec<String> = std::env::args().skip(1).collect();
+    let other_values = all_args.iter().any(|a| a == "--other-values");
+    let mut args = all_args.into_iter().filter(|a| a != "--other-values");
     let seeds: u64 = args.next().map_or(10, |s| s.parse().expect("seed count"));
     let filter = args.next().unwrap_or_default();
     let v = vehicle();
-    let all = cases();
+    let all = cases(if other_values {
+        Hidden::others()
+    } else {
+        Hidden::all()
+    });
     let wanted: Vec<&Case> = all.iter().filter(|c| c.label().contains(&filter)).collect();
     let mut tallies: HashMap<String, Tally> = HashMap::new();
     for k in 0..seeds {

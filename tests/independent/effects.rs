@@ -71,14 +71,47 @@ impl Hidden {
         ]
     }
 
-    /// Short label for tables.
-    pub fn label(&self) -> &'static str {
+    /// The same five kinds at other values, sizes and places than [`Self::all`]'s (a
+    /// weaker wake, a drag with other areas acting below the CG, another rotor weak, the
+    /// CG off the other way, a weaker ground effect reaching higher): a check that the
+    /// diagnosis is not tuned to the harness's values.
+    pub fn others() -> [Hidden; 5] {
+        [
+            Hidden::RearWake { loss: 0.5 },
+            Hidden::QuadraticDrag {
+                area: [0.020, 0.015, 0.040],
+                centre: [0.0, 0.0, 0.010],
+            },
+            Hidden::WeakRotor {
+                rotor: 4,
+                thrust: 0.92,
+                torque: 0.95,
+            },
+            Hidden::CgOffset {
+                offset: [0.010, 0.006, 0.0],
+            },
+            Hidden::GroundEffect {
+                gain: 0.2,
+                decay: 0.8,
+            },
+        ]
+    }
+
+    /// Short label for tables, with the effect's values.
+    pub fn label(&self) -> String {
         match self {
-            Hidden::RearWake { .. } => "rear-rotor wake (u > 0)",
-            Hidden::QuadraticDrag { .. } => "quadratic airframe drag",
-            Hidden::WeakRotor { .. } => "weak rotor 2",
-            Hidden::CgOffset { .. } => "CG offset",
-            Hidden::GroundEffect { .. } => "ground effect (exponential)",
+            Hidden::RearWake { loss } => format!("rear-rotor wake (u > 0), loss {loss}"),
+            Hidden::QuadraticDrag { area, centre } => format!(
+                "quadratic airframe drag, areas {:?} m², centre z {} m",
+                area, centre[2]
+            ),
+            Hidden::WeakRotor { rotor, thrust, .. } => {
+                format!("weak rotor {rotor}, thrust {thrust}")
+            }
+            Hidden::CgOffset { offset } => format!("CG offset {offset:?} m"),
+            Hidden::GroundEffect { gain, decay } => {
+                format!("ground effect (exponential), gain {gain}, decay {decay} D")
+            }
         }
     }
 }

@@ -49,15 +49,16 @@ pub struct Case {
 impl Case {
     /// "surface, CG offset", "flight, clean", …
     pub fn label(&self) -> String {
-        let effect = self.hidden.map_or("clean", |h| h.label());
+        let effect = self.hidden.map_or("clean".into(), |h| h.label());
         format!("{}, {effect}", self.data.label())
     }
 }
 
-/// The ten effect cases (each effect in both kinds), then the two clean sets.
-pub fn cases() -> Vec<Case> {
+/// The ten effect cases of `effects` (each effect in both kinds, e.g. of
+/// [`Hidden::all`]), then the two clean sets.
+pub fn cases(effects: [Hidden; 5]) -> Vec<Case> {
     let mut out = Vec::new();
-    for hidden in Hidden::all() {
+    for hidden in effects {
         for data in [DataKind::Surface, DataKind::Flight] {
             out.push(Case {
                 data,
