@@ -214,6 +214,60 @@ fn per_rotor_ground_effect_columns_are_exact() {
 }
 
 #[test]
+fn multirotor_ground_effect_columns_are_exact() {
+    // Each rotor's wake as a point source of strength Q = πR²ν at its hub, mirrored
+    // below the ground (the image method): the upwash of a source at distance ρ is
+    // Q/(4πρ²) along the line from it, so its vertical part at hub i from the image of
+    // hub j is (R²ν/4) Δz/ρ³. Summed over all images (rotor i's own gives
+    // Cheeseman–Bennett's (R/4z)²) it is s_i ν, and thrust rises by s_i/(1 − s_i) of
+    // itself. Computed here from the hubs' positions in NED space (hub heights held at
+    // ≥ R/2 as the product does), for random tilts, on a quad× and a hexa+.
+    for preset in [Preset::QuadX, Preset::HexaPlus] {
+        let v = vehicle(preset);
+        let (r, h) = (v.props.rotor_radius, v.props.hub_height);
+        let e = check_candidate(
+            &v,
+            |c| c.name == "ground effect, multirotor",
+            &[1.0],
+            |s, b| {
+                let body_to_ned = quat_to_matrix(s.attitude.unwrap());
+                // Hub positions: north, east, up above the ground (m).
+                let hubs: Vec<[f64; 3]> = v
+                    .rotors()
+                    .iter()
+                    .map(|rotor| {
+                        let hub = [rotor.x, rotor.y, -h];
+                        let ned: [f64; 3] = std::array::from_fn(|k| {
+                            (0..3).map(|c| body_to_ned[k][c] * hub[c]).sum()
+                        });
+                        [ned[0], ned[1], (s.height.unwrap() - ned[2]).max(r / 2.0)]
+                    })
+                    .collect();
+                let d: Vec<f64> = rotor_thrusts(&v, s)
+                    .iter()
+                    .zip(&hubs)
+                    .map(|(t, hub)| {
+                        let upwash: f64 = hubs
+                            .iter()
+                            .map(|other| {
+                                let image = [other[0], other[1], -other[2]];
+                                let rel: [f64; 3] = std::array::from_fn(|k| hub[k] - image[k]);
+                                let rho = rel.iter().map(|c| c * c).sum::<f64>().sqrt();
+                                let q = std::f64::consts::PI * r * r;
+                                q / (4.0 * std::f64::consts::PI * rho * rho) * rel[2] / rho
+                            })
+                            .sum();
+                        upwash / (1.0 - upwash) * t
+                    })
+                    .collect();
+                with_thrust_change(&v, b, &d)
+            },
+        );
+        assert!(e < 1e-9, "{preset:?}: {e:e}");
+    }
+}
+
+#[test]
 fn second_order_inflow_columns_are_exact() {
     // ΔT_i = ρπR² (c₁ V_h w_i + c₂ w_i²) at each rotor's Eq. 18 axial hub velocity
     // w_i = w + p y_i − q x_i, summed over the airframe with each rotor's lever arm (a

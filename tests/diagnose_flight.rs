@@ -49,22 +49,32 @@ fn diagnose_flight(effects: &[&str], duration: f64, near_ground: f64, seed: u64)
     results.outcome().diagnosis.clone().unwrap()
 }
 
-/// The ground effect the diagnosis added, which must be the per-rotor-height form.
+/// The ground effect the diagnosis added, which must be a form with each rotor at its
+/// own height: Cheeseman–Bennett per rotor (the truth's law), or the multirotor form
+/// (every rotor's ground image, its own among them). On this quadrotor's spacing (five
+/// radii between neighbours) the neighbours' images add little near the ground, so the
+/// two forms are alike there and the data may choose either; when they are within noise
+/// of each other the finding must say they are not separable.
 fn per_rotor_ground_effect(d: &Diagnosis) -> &mrsysid::internals::diagnose::CandidateScore {
     let e = d
         .effects_added
         .iter()
         .find(|e| e.kind == EffectKind::GroundEffect)
         .unwrap_or_else(|| panic!("no ground effect: {:#?}", d.findings));
-    assert_eq!(e.name, "ground effect, per-rotor height");
+    assert!(
+        e.name == "ground effect, per-rotor height" || e.name == "ground effect, multirotor",
+        "{}",
+        e.name
+    );
     e
 }
 
-/// Estimate and σ of the per-rotor ground-effect scale in the final model.
+/// Estimate and σ of the added ground-effect form's scale in the final model.
 fn final_ground_effect_scale(d: &Diagnosis) -> (f64, f64) {
+    let e = per_rotor_ground_effect(d);
     let i = d
         .structure
-        .param_id("ground_effect_scale_per_rotor")
+        .param_id(&e.parameters[0].name)
         .expect("in the final model")
         .index();
     (d.theta[i], d.std[i])
@@ -76,8 +86,9 @@ fn final_ground_effect_scale(d: &Diagnosis) -> (f64, f64) {
 /// is a few percent of thrust down there and nothing above, and the aggressive
 /// manoeuvre tilts the vehicle so the low rotors feel more of it (a roll and pitch
 /// moment). Before this test, the one ground-effect form (every rotor at the CG's
-/// height) was not even significant and nothing named the effect; now the per-rotor
-/// form is chosen and judged on the held-out samples where it acts (9 % of them here).
+/// height) was not even significant and nothing named the effect; now a form with each
+/// rotor at its own height is chosen and judged on the held-out samples where it acts (9 %
+/// of them here).
 #[test]
 fn ground_effect_in_a_partly_low_flight_is_found_in_its_per_rotor_form() {
     let d = diagnose_flight(&["ground_effect=1"], 60.0, 30.0, 14_000);

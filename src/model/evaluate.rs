@@ -4,7 +4,9 @@
 //! need ([`SignalConstants`]).
 
 use super::attitude::per_attitude;
-use super::local_effects::{ground_effect_factor, vortex_ring_onset, wake_overlaps};
+use super::local_effects::{
+    ground_effect_factor, multirotor_ground_effect_factor, vortex_ring_onset, wake_overlaps,
+};
 use super::signals::{Signal, in_plane_speed};
 use crate::mixing::{Mixing, mix_row};
 use crate::sample::SampleChunk;
@@ -136,6 +138,20 @@ impl SignalConstants {
                     let down = m[2];
                     let hub_down = down[0] * x + down[1] * y - down[2] * h;
                     ground_effect_factor(r, z - hub_down)
+                });
+            }
+            MultirotorGroundEffect(i) => {
+                let (r, h) = (self.rotor_radius, self.hub_height);
+                let (height, attitude) = (present(&chunk.height), present(&chunk.attitude));
+                per_attitude(attitude, height, dst, |m, z| {
+                    // Body→NED of a hub's offset (x_j, y_j, −h): north, east, and the
+                    // height above ground (the CG height less the down part).
+                    let ned = |&[x, y]: &[f64; 2]| {
+                        let [n, e, d] = m.map(|row| row[0] * x + row[1] * y - row[2] * h);
+                        [n, e, z - d]
+                    };
+                    let hub = ned(&self.hubs[usize::from(i)]);
+                    multirotor_ground_effect_factor(r, hub, self.hubs.iter().map(ned))
                 });
             }
             WakeImmersion(i) => {

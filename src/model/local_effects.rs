@@ -12,6 +12,31 @@ pub fn ground_effect_factor(rotor_radius: f64, rotor_height: f64) -> f64 {
     s / (1.0 - s)
 }
 
+/// Ground-effect factor of the hub at `hub` under the images of all the vehicle's hubs
+/// `hubs` (itself included; see
+/// [`Signal::MultirotorGroundEffect`](super::Signal::MultirotorGroundEffect)): each hub
+/// as its north and east offset from the CG (m) and its rotor-plane height above ground
+/// (m, held here at ≥ R/2).
+pub fn multirotor_ground_effect_factor(
+    rotor_radius: f64,
+    hub: [f64; 3],
+    hubs: impl IntoIterator<Item = [f64; 3]>,
+) -> f64 {
+    let low = rotor_radius / 2.0;
+    let [xi, yi, zi] = hub;
+    let zi = zi.max(low);
+    let s: f64 = hubs
+        .into_iter()
+        .map(|[xj, yj, zj]| {
+            let dz = zi + zj.max(low);
+            let (dx, dy) = (xi - xj, yi - yj);
+            let d3 = (dx * dx + dy * dy + dz * dz).powf(1.5);
+            0.25 * rotor_radius * rotor_radius * dz / d3
+        })
+        .sum();
+    s / (1.0 - s)
+}
+
 /// Overlap of rotor `i` with the wakes of the rotors upstream of it at in-plane
 /// velocities (`u`, `v`) (m/s), capped at 1 (see
 /// [`Signal::WakeImmersion`](super::Signal::WakeImmersion)), into `dst`: 0 at V_h = 0.

@@ -114,6 +114,17 @@ pub enum Signal {
     /// Element (k, j) of the NED→body rotation, index 3k + j (body axis k, NED axis j),
     /// dimensionless; needs the attitude signals.
     NedToBody(u8),
+    /// Ground-effect factor g_i = s_i/(1 − s_i) of rotor `i` (0-based) under the images
+    /// of every rotor, not only its own: each rotor's wake is a point source of strength
+    /// πR²ν mirrored below the ground, and s_i = Σ_j (R²/4) Δz_ij/|Δ_ij|³ is the upwash
+    /// (per unit ν) that the image of rotor j puts on hub i, with Δ_ij the vector from
+    /// that image to hub i and Δz_ij = z_i + z_j its vertical part (z the rotor-plane
+    /// heights above ground, each held at ≥ R/2, from the attitude as in
+    /// [`Signal::RotorGroundEffect`]). The own image alone (j = i) gives
+    /// Cheeseman–Bennett's (R/(4 z_i))²; the neighbours' images add the multirotor's
+    /// extra lift, which reaches higher. Dimensionless; needs the `height` and attitude
+    /// signals.
+    MultirotorGroundEffect(u8),
 }
 
 impl Signal {

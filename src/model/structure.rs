@@ -335,10 +335,12 @@ impl ModelStructure {
         if self.needs_slow_thrust() && chunk.omega_squared_slow.is_none() {
             return Err(ModelError::MissingSlowThrust);
         }
-        let per_rotor_ground = self
-            .required
-            .iter()
-            .any(|s| matches!(s, Signal::RotorGroundEffect(_)));
+        let per_rotor_ground = self.required.iter().any(|s| {
+            matches!(
+                s,
+                Signal::RotorGroundEffect(_) | Signal::MultirotorGroundEffect(_)
+            )
+        });
         let needs_height = per_rotor_ground || self.required.contains(&Signal::GroundEffect);
         if needs_height && chunk.height.is_none() {
             return Err(ModelError::MissingHeight);

@@ -112,6 +112,7 @@ mod tests {
         let expected = [
             "ground effect",
             "ground effect, per-rotor height",
+            "ground effect, multirotor",
             "weak rotor 1",
             "weak rotor 2",
             "weak rotor 3",
@@ -193,9 +194,9 @@ mod tests {
                 assert_eq!(p.reading, reading, "{}", p.name);
             }
         }
-        // 4 rotors × 3 scales, 3 CG, 2 ground, 4 wake, vortex ring, 2 × 3 drag, delay,
+        // 4 rotors × 3 scales, 3 CG, 3 ground, 4 wake, vortex ring, 2 × 3 drag, delay,
         // 3 wind, 2 bias, 3 bands × 3 trim fractions, vertical linear drag.
-        assert_eq!(ranged, 44);
+        assert_eq!(ranged, 45);
         let freed = library
             .iter()
             .filter(|c| c.kind == EffectKind::DecoupledMoments)
