@@ -318,6 +318,37 @@ fn quadratic_drag_columns_are_exact() {
 }
 
 #[test]
+fn drag_off_the_cg_columns_are_exact() {
+    // Drag along the airflow, F = −ρ/2 |V| (A_x u, A_y v, A_z w), acting at a centre of
+    // pressure r = (0, 0, z_cp) (body axes, below the CG for z_cp > 0): the wrench gains
+    // F and the moment r × F. The candidate's parameters are the three areas and the
+    // moment areas z_cp A_y (roll) and z_cp A_x (pitch).
+    let v = vehicle(Preset::QuadX);
+    let (cda, z_cp) = ([0.01, 0.02, 0.03], -0.04);
+    let values = [cda[0], cda[1], cda[2], z_cp * cda[1], z_cp * cda[0]];
+    let e = check_candidate(
+        &v,
+        |c| c.name == "quadratic airframe drag, off the CG",
+        &values,
+        |s, b| {
+            let speed = s.velocity.iter().map(|c| c * c).sum::<f64>().sqrt();
+            let f: [f64; 3] =
+                std::array::from_fn(|k| -0.5 * 1.225 * cda[k] * s.velocity[k] * speed);
+            let m = cross([0.0, 0.0, z_cp], f);
+            [
+                b[0] + f[0],
+                b[1] + f[1],
+                b[2] + f[2],
+                b[3] + m[0],
+                b[4] + m[1],
+                b[5] + m[2],
+            ]
+        },
+    );
+    assert!(e < 1e-9, "{e:e}");
+}
+
+#[test]
 fn vertical_linear_drag_column_is_exact() {
     // An airframe drag −D_z w on F_z alone, at the CG: no moment, no rotor speed.
     let v = vehicle(Preset::QuadX);

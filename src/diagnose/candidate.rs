@@ -125,6 +125,15 @@ pub enum Statement {
         /// The change otherwise, e.g. `rotor 3 stronger`.
         more: String,
     },
+    /// As the name with the centre of pressure of a drag acting off the CG: the distance
+    /// z_cp (m, body z, below the CG positive) that best relates the moment areas
+    /// m = z_cp A to the areas A in least squares, z_cp = Σ m A / Σ A², shown in mm.
+    CentreOfPressure {
+        /// Indices of the areas A (m²).
+        areas: [usize; 2],
+        /// Indices of the moment areas z_cp A (m³), in the order of `areas`.
+        moments: [usize; 2],
+    },
 }
 
 /// One parameter of a candidate with the columns it multiplies.
@@ -310,6 +319,28 @@ impl Candidate {
                 }
                 None => self.name.clone(),
             },
+            Statement::CentreOfPressure { areas, moments } => {
+                let value = |k: &usize| estimates.get(*k).copied();
+                let pairs: Option<Vec<(f64, f64)>> = areas
+                    .iter()
+                    .zip(moments)
+                    .map(|(a, m)| Some((value(a)?, value(m)?)))
+                    .collect();
+                let Some(pairs) = pairs else {
+                    return self.name.clone();
+                };
+                let a2: f64 = pairs.iter().map(|(a, _)| a * a).sum();
+                let z = pairs.iter().map(|(a, m)| a * m).sum::<f64>() / a2;
+                if !z.is_finite() {
+                    return self.name.clone();
+                }
+                let side = if z < 0.0 { "above" } else { "below" };
+                format!(
+                    "{}, centre of pressure {:.0} mm {side} the CG",
+                    self.name,
+                    1000.0 * z.abs()
+                )
+            }
             Statement::Name => self.name.clone(),
         }
     }
@@ -342,6 +373,32 @@ mod tests {
         // Without that estimate, and for a candidate stated by name: the name.
         assert_eq!(c.describe(&[0.5]), "weak rotor 3");
         assert_eq!(stated(Statement::Name).describe(&[0.5]), "weak rotor 3");
+    }
+
+    #[test]
+    fn a_drag_off_the_cg_is_stated_with_its_centre_of_pressure() {
+        let c = stated(Statement::CentreOfPressure {
+            areas: [0, 1],
+            moments: [3, 4],
+        });
+        // Moment areas z A with z = −15 mm (above the CG) on both axes, then one that
+        // disagrees: the least-squares z_cp = Σ m A / Σ A².
+        let (ax, ay) = (0.01, 0.012);
+        let z = -0.015;
+        let exact = c.describe(&[ax, ay, 0.03, z * ax, z * ay]);
+        assert_eq!(exact, "weak rotor 3, centre of pressure 15 mm above the CG");
+        let mixed = c.describe(&[ax, ay, 0.03, 0.0, 0.02 * ay]);
+        let z = 0.02 * ay * ay / (ax * ax + ay * ay);
+        assert_eq!(
+            mixed,
+            format!(
+                "weak rotor 3, centre of pressure {:.0} mm below the CG",
+                1000.0 * z
+            )
+        );
+        // Without its estimates, or with no area: the name.
+        assert_eq!(c.describe(&[ax, ay, 0.03]), "weak rotor 3");
+        assert_eq!(c.describe(&[0.0, 0.0, 0.03, 0.0, 0.0]), "weak rotor 3");
     }
 
     #[test]

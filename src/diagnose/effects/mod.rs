@@ -125,6 +125,7 @@ mod tests {
             "rotor-wake interaction, backward flight",
             "quadratic airframe drag",
             "quadratic airframe drag, along the airflow",
+            "quadratic airframe drag, off the CG",
             "vortex-ring state",
             "terms linear in Vh",
             "rotor-speed delay",
@@ -150,7 +151,7 @@ mod tests {
     /// `*scale*` and `*loss*`, a freed coefficient for `name@axis`).
     #[test]
     fn parameters_carry_their_range_and_reading() {
-        let ranges: [(&str, f64, f64); 18] = [
+        let ranges: [(&str, f64, f64); 19] = [
             ("thrust_scale_", -0.6, 0.6),
             ("in_plane_scale_", -0.6, 0.6),
             ("torque_scale_", -0.6, 0.6),
@@ -163,6 +164,9 @@ mod tests {
             ("wake_thrust_loss", 0.0, 1.0),
             ("vortex_ring_thrust_loss", 0.0, 0.6),
             ("drag_area_", 0.0, 2.0),
+            // Added with the drag off the CG (never in the old table): a centre of
+            // pressure within 0.5 m of the CG times an area of at most 2 m².
+            ("drag_moment_area_", -1.0, 1.0),
             // Narrowed with the closed-loop guard (was −0.05..0.2).
             ("rotor_speed_delay", -0.05, 0.05),
             ("wind_", -30.0, 30.0),
@@ -194,9 +198,9 @@ mod tests {
                 assert_eq!(p.reading, reading, "{}", p.name);
             }
         }
-        // 4 rotors × 3 scales, 3 CG, 3 ground, 4 wake, vortex ring, 2 × 3 drag, delay,
-        // 3 wind, 2 bias, 3 bands × 3 trim fractions, vertical linear drag.
-        assert_eq!(ranged, 45);
+        // 4 rotors × 3 scales, 3 CG, 3 ground, 4 wake, vortex ring, 2 × 3 + 5 drag,
+        // delay, 3 wind, 2 bias, 3 bands × 3 trim fractions, vertical linear drag.
+        assert_eq!(ranged, 50);
         let freed = library
             .iter()
             .filter(|c| c.kind == EffectKind::DecoupledMoments)
