@@ -183,28 +183,39 @@ fn ground_effect_columns_are_exact() {
     assert!(e < 1e-9, "{e:e}");
 }
 
+/// Each hub's position relative to the CG under the sample's attitude, NED (m): north,
+/// east, and its height above the ground (the CG height less the down component of the
+/// hub's body offset (x_i, y_i, −h)).
+fn hubs_over_ground(v: &Vehicle, s: &Sample) -> Vec<[f64; 3]> {
+    let body_to_ned = quat_to_matrix(s.attitude.unwrap());
+    let h = v.props.hub_height;
+    v.rotors()
+        .iter()
+        .map(|rotor| {
+            let hub = [rotor.x, rotor.y, -h];
+            let ned: [f64; 3] =
+                std::array::from_fn(|k| (0..3).map(|c| body_to_ned[k][c] * hub[c]).sum());
+            [ned[0], ned[1], s.height.unwrap() - ned[2]]
+        })
+        .collect()
+}
+
 #[test]
 fn per_rotor_ground_effect_columns_are_exact() {
     // Each rotor at its own height: the CG height less the down component (NED) of the
     // hub's body offset (x_i, y_i, −h) under the sample's attitude, for random tilts.
     for preset in [Preset::QuadX, Preset::HexaPlus] {
         let v = vehicle(preset);
-        let (r, h) = (v.props.rotor_radius, v.props.hub_height);
+        let r = v.props.rotor_radius;
         let e = check_candidate(
             &v,
             |c| c.name == "ground effect, per-rotor height",
             &[1.0],
             |s, b| {
-                let body_to_ned = quat_to_matrix(s.attitude.unwrap());
                 let d: Vec<f64> = rotor_thrusts(&v, s)
                     .iter()
-                    .zip(v.rotors())
-                    .map(|(t, rotor)| {
-                        let hub = [rotor.x, rotor.y, -h];
-                        let down: f64 = (0..3).map(|k| body_to_ned[2][k] * hub[k]).sum();
-                        let z = s.height.unwrap() - down;
-                        mrsysid::internals::model::ground_effect_factor(r, z) * t
-                    })
+                    .zip(hubs_over_ground(&v, s))
+                    .map(|(t, [_, _, z])| mrsysid::internals::model::ground_effect_factor(r, z) * t)
                     .collect();
                 with_thrust_change(&v, b, &d)
             },
@@ -224,24 +235,15 @@ fn multirotor_ground_effect_columns_are_exact() {
     // ≥ R/2 as the product does), for random tilts, on a quad× and a hexa+.
     for preset in [Preset::QuadX, Preset::HexaPlus] {
         let v = vehicle(preset);
-        let (r, h) = (v.props.rotor_radius, v.props.hub_height);
+        let r = v.props.rotor_radius;
         let e = check_candidate(
             &v,
             |c| c.name == "ground effect, multirotor",
             &[1.0],
             |s, b| {
-                let body_to_ned = quat_to_matrix(s.attitude.unwrap());
-                // Hub positions: north, east, up above the ground (m).
-                let hubs: Vec<[f64; 3]> = v
-                    .rotors()
-                    .iter()
-                    .map(|rotor| {
-                        let hub = [rotor.x, rotor.y, -h];
-                        let ned: [f64; 3] = std::array::from_fn(|k| {
-                            (0..3).map(|c| body_to_ned[k][c] * hub[c]).sum()
-                        });
-                        [ned[0], ned[1], (s.height.unwrap() - ned[2]).max(r / 2.0)]
-                    })
+                let hubs: Vec<[f64; 3]> = hubs_over_ground(&v, s)
+                    .into_iter()
+                    .map(|[n, e, z]| [n, e, z.max(r / 2.0)])
                     .collect();
                 let d: Vec<f64> = rotor_thrusts(&v, s)
                     .iter()
