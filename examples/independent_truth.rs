@@ -6,12 +6,14 @@
 //! beyond what the clean set of the same seed gets.
 //!
 //! ```text
-//! cargo run --release --example independent_truth [-- [--other-values] SEEDS [CASE-FILTER]]
+//! cargo run --release --example independent_truth [-- [--other-values] [--short-flight] [--noisy] SEEDS [CASE-FILTER]]
 //! cargo run --release --example independent_truth -- 10 'flight, CG'
 //! ```
 //!
 //! `--other-values` runs the same five kinds at other values, sizes and places
-//! ([`Hidden::others`]: not the values the harness was first run with).
+//! ([`Hidden::others`]: not the values the harness was first run with);
+//! `--short-flight` flies 30 s at 100 Hz (the first 10 s low) instead of 60 s at 200 Hz,
+//! and `--noisy` doubles every sensor's noise in the flights.
 
 #[path = "../tests/independent/mod.rs"]
 mod independent;
@@ -20,8 +22,9 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use independent::effects::Hidden;
+use independent::flight::FlightConfig;
 use independent::score::{
-    Case, DataKind, Naming, Score, cases, data, diagnose, effect_size, expected_kind, score,
+    Case, DataKind, Naming, Score, cases, data_flown, diagnose, effect_size, expected_kind, score,
     vehicle,
 };
 use mrsysid::internals::diagnose::Diagnosis;
@@ -42,8 +45,17 @@ struct Tally {
 
 fn main() {
     let all_args: Vec<String> = std::env::args().skip(1).collect();
-    let other_values = all_args.iter().any(|a| a == "--other-values");
-    let mut args = all_args.into_iter().filter(|a| a != "--other-values");
+    let flag = |name: &str| all_args.iter().any(|a| a == name);
+    let other_values = flag("--other-values");
+    let mut flight = if flag("--short-flight") {
+        FlightConfig::short()
+    } else {
+        FlightConfig::default()
+    };
+    if flag("--noisy") {
+        flight.noise_scale = 2.0;
+    }
+    let mut args = all_args.iter().filter(|a| !a.starts_with("--")).cloned();
     let seeds: u64 = args.next().map_or(10, |s| s.parse().expect("seed count"));
     let filter = args.next().unwrap_or_default();
     let v = vehicle();
@@ -63,7 +75,7 @@ fn main() {
                     data: kind,
                     hidden: None,
                 };
-                clean.insert(kind.label(), run(&v, &case, seed));
+                clean.insert(kind.label(), run(&v, &case, seed, &flight));
             }
         }
         for case in &wanted {
@@ -71,7 +83,7 @@ fn main() {
             let d = if case.hidden.is_none() {
                 clean_d.clone()
             } else {
-                run(&v, case, seed)
+                run(&v, case, seed, &flight)
             };
             let s = score(&d, clean_d, case.hidden.as_ref().map(expected_kind));
             report(case, seed, &d, &s);
@@ -114,11 +126,11 @@ fn main() {
     }
 }
 
-/// The data of `case` at `seed`, diagnosed, with the time it took (and, for an effect,
-/// its size in the data).
-fn run(v: &mrsysid::Vehicle, case: &Case, seed: u64) -> Diagnosis {
+/// The data of `case` at `seed` (a flight flown as `flight` says), diagnosed, with the
+/// time it took (and, for an effect, its size in the data).
+fn run(v: &mrsysid::Vehicle, case: &Case, seed: u64, flight: &FlightConfig) -> Diagnosis {
     let start = Instant::now();
-    let samples = data(v, case, seed);
+    let samples = data_flown(v, case, seed, flight);
     if case.hidden.is_some() {
         let size = effect_size(v, case, &samples).map(|x| format!("{x:.3}"));
         println!("{} | seed {seed}: effect RMS Fx..Mz {size:?}", case.label());

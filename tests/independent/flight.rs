@@ -30,15 +30,30 @@ pub struct FlightConfig {
     pub rate_hz: u32,
     /// Seconds flown near the ground at the start, s.
     pub low_seconds: f64,
+    /// Every sensor's noise (and the gyro bias) times this (-).
+    pub noise_scale: f64,
 }
 
 impl Default for FlightConfig {
-    /// 60 s at 200 Hz, the first 20 s low.
+    /// 60 s at 200 Hz, the first 20 s low, the stated sensor noise.
     fn default() -> Self {
         Self {
             duration: 60.0,
             rate_hz: 200,
             low_seconds: 20.0,
+            noise_scale: 1.0,
+        }
+    }
+}
+
+impl FlightConfig {
+    /// A shorter flight: 30 s at 100 Hz, the first 10 s low.
+    pub fn short() -> Self {
+        Self {
+            duration: 30.0,
+            rate_hz: 100,
+            low_seconds: 10.0,
+            ..Self::default()
         }
     }
 }
@@ -251,7 +266,9 @@ pub fn fly(air: &Airframe, cfg: &FlightConfig, seed: u64) -> Vec<Sample> {
     let mut noise = StdRng::seed_from_u64(seed ^ 0xf119_470b);
     let set_points = schedule(cfg, &mut plan);
     let excitation = [1.0, 0.06, 0.06, 0.015].map(|rms| Multisine::new(rms, &mut plan));
-    let gyro_bias = Vector3::from_fn(|_, _| NOISE.gyro_bias * gauss(&mut noise));
+    let gyro_bias = Vector3::from_fn(|_, _| cfg.noise_scale * NOISE.gyro_bias * gauss(&mut noise));
+    // A draw of sensor noise of standard deviation `sd` (scaled by the configuration).
+    let mut draw = |sd: f64| cfg.noise_scale * sd * gauss(&mut noise);
     let hover = air.hover_omega();
     let start_altitude = 0.25;
     let mut s = State {
@@ -302,7 +319,7 @@ pub fn fly(air: &Airframe, cfg: &FlightConfig, seed: u64) -> Vec<Sample> {
                 &omega_dot,
                 wrench,
                 gyro_bias,
-                &mut noise,
+                &mut draw,
             ));
         }
         let force = Vector3::new(wrench[0], wrench[1], wrench[2]);
@@ -328,9 +345,8 @@ fn log_sample(
     omega_dot: &[f64],
     wrench: [f64; 6],
     gyro_bias: Vector3<f64>,
-    noise: &mut StdRng,
+    n: &mut impl FnMut(f64) -> f64,
 ) -> Sample {
-    let mut n = |sd: f64| sd * gauss(noise);
     let velocity = body_velocity.map(|x| x + n(NOISE.velocity));
     let rates = (s.rates + gyro_bias).map(|x| x + n(NOISE.gyro));
     let omega = s.omega.iter().map(|w| w + n(NOISE.omega)).collect();

@@ -83,10 +83,15 @@ pub fn vehicle() -> Vehicle {
 /// The data of `case` at `seed` (the clean set of the same kind and seed shares its
 /// points or set points, excitation and noise).
 pub fn data(vehicle: &Vehicle, case: &Case, seed: u64) -> Vec<Sample> {
+    data_flown(vehicle, case, seed, &FlightConfig::default())
+}
+
+/// As [`data`], a flight flown as `flight` says.
+pub fn data_flown(vehicle: &Vehicle, case: &Case, seed: u64, flight: &FlightConfig) -> Vec<Sample> {
     let air = Airframe::new(vehicle, case.hidden);
     match case.data {
         DataKind::Surface => response_surface(&air, SURFACE_POINTS, seed),
-        DataKind::Flight => fly(&air, &FlightConfig::default(), seed),
+        DataKind::Flight => fly(&air, flight, seed),
     }
 }
 
