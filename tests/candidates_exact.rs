@@ -200,28 +200,38 @@ fn hubs_over_ground(v: &Vehicle, s: &Sample) -> Vec<[f64; 3]> {
         .collect()
 }
 
-#[test]
-fn per_rotor_ground_effect_columns_are_exact() {
-    // Each rotor at its own height: the CG height less the down component (NED) of the
-    // hub's body offset (x_i, y_i, −h) under the sample's attitude, for random tilts.
+/// Asserts the ground-effect form `name` exact (1e-9) against each rotor's thrust
+/// times `gain(R, hubs, i)` (the hubs as [`hubs_over_ground`] gives them), over random
+/// tilts on a quad× and a hexa+.
+fn assert_ground_effect_form_exact(name: &str, gain: impl Fn(f64, &[[f64; 3]], usize) -> f64) {
     for preset in [Preset::QuadX, Preset::HexaPlus] {
         let v = vehicle(preset);
         let r = v.props.rotor_radius;
         let e = check_candidate(
             &v,
-            |c| c.name == "ground effect, per-rotor height",
+            |c| c.name == name,
             &[1.0],
             |s, b| {
+                let hubs = hubs_over_ground(&v, s);
                 let d: Vec<f64> = rotor_thrusts(&v, s)
                     .iter()
-                    .zip(hubs_over_ground(&v, s))
-                    .map(|(t, [_, _, z])| mrsysid::internals::model::ground_effect_factor(r, z) * t)
+                    .enumerate()
+                    .map(|(i, t)| gain(r, &hubs, i) * t)
                     .collect();
                 with_thrust_change(&v, b, &d)
             },
         );
-        assert!(e < 1e-9, "{preset:?}: {e:e}");
+        assert!(e < 1e-9, "{name}, {preset:?}: {e:e}");
     }
+}
+
+#[test]
+fn per_rotor_ground_effect_columns_are_exact() {
+    // Each rotor at its own height: the CG height less the down component (NED) of the
+    // hub's body offset (x_i, y_i, −h) under the sample's attitude, for random tilts.
+    assert_ground_effect_form_exact("ground effect, per-rotor height", |r, hubs, i| {
+        mrsysid::internals::model::ground_effect_factor(r, hubs[i][2])
+    });
 }
 
 #[test]
@@ -232,41 +242,21 @@ fn multirotor_ground_effect_columns_are_exact() {
     // hub j is (R²ν/4) Δz/ρ³. Summed over all images (rotor i's own gives
     // Cheeseman–Bennett's (R/4z)²) it is s_i ν, and thrust rises by s_i/(1 − s_i) of
     // itself. Computed here from the hubs' positions in NED space (hub heights held at
-    // ≥ R/2 as the product does), for random tilts, on a quad× and a hexa+.
-    for preset in [Preset::QuadX, Preset::HexaPlus] {
-        let v = vehicle(preset);
-        let r = v.props.rotor_radius;
-        let e = check_candidate(
-            &v,
-            |c| c.name == "ground effect, multirotor",
-            &[1.0],
-            |s, b| {
-                let hubs: Vec<[f64; 3]> = hubs_over_ground(&v, s)
-                    .into_iter()
-                    .map(|[n, e, z]| [n, e, z.max(r / 2.0)])
-                    .collect();
-                let d: Vec<f64> = rotor_thrusts(&v, s)
-                    .iter()
-                    .zip(&hubs)
-                    .map(|(t, hub)| {
-                        let upwash: f64 = hubs
-                            .iter()
-                            .map(|other| {
-                                let image = [other[0], other[1], -other[2]];
-                                let rel: [f64; 3] = std::array::from_fn(|k| hub[k] - image[k]);
-                                let rho = rel.iter().map(|c| c * c).sum::<f64>().sqrt();
-                                let q = std::f64::consts::PI * r * r;
-                                q / (4.0 * std::f64::consts::PI * rho * rho) * rel[2] / rho
-                            })
-                            .sum();
-                        upwash / (1.0 - upwash) * t
-                    })
-                    .collect();
-                with_thrust_change(&v, b, &d)
-            },
-        );
-        assert!(e < 1e-9, "{preset:?}: {e:e}");
-    }
+    // ≥ R/2 as the product does).
+    assert_ground_effect_form_exact("ground effect, multirotor", |r, hubs, i| {
+        let held = |[n, e, z]: [f64; 3]| [n, e, z.max(r / 2.0)];
+        let hub = held(hubs[i]);
+        let q = std::f64::consts::PI * r * r;
+        let upwash: f64 = (hubs.iter())
+            .map(|&other| {
+                let [n, e, z] = held(other);
+                let rel = [hub[0] - n, hub[1] - e, hub[2] + z];
+                let rho = rel.iter().map(|c| c * c).sum::<f64>().sqrt();
+                q / (4.0 * std::f64::consts::PI * rho * rho) * rel[2] / rho
+            })
+            .sum();
+        upwash / (1.0 - upwash)
+    });
 }
 
 #[test]

@@ -17,7 +17,7 @@ pub fn ground_effect_factor(rotor_radius: f64, rotor_height: f64) -> f64 {
 /// [`Signal::MultirotorGroundEffect`](super::Signal::MultirotorGroundEffect)): each hub
 /// as its north and east offset from the CG (m) and its rotor-plane height above ground
 /// (m, held here at ≥ R/2).
-pub fn multirotor_ground_effect_factor(
+pub(super) fn multirotor_ground_effect_factor(
     rotor_radius: f64,
     hub: [f64; 3],
     hubs: impl IntoIterator<Item = [f64; 3]>,

@@ -82,7 +82,7 @@ mod signals;
 mod structure;
 mod workspace;
 
-pub use local_effects::{ground_effect_factor, multirotor_ground_effect_factor};
+pub use local_effects::ground_effect_factor;
 pub use options::{InflowCorrection, ModelOptions, RotorInertiaTerms};
 pub(crate) use reuse::Reuse;
 pub use signals::{Column, ParamId, Parameter, Signal, Term, term};
