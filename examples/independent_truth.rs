@@ -6,14 +6,16 @@
 //! beyond what the clean set of the same seed gets.
 //!
 //! ```text
-//! cargo run --release --example independent_truth [-- [--other-values] [--short-flight] [--noisy] SEEDS [CASE-FILTER]]
+//! cargo run --release --example independent_truth [-- [--other-values] [--short-flight] [--noisy] [--iris] SEEDS [CASE-FILTER]]
 //! cargo run --release --example independent_truth -- 10 'flight, CG'
 //! ```
 //!
 //! `--other-values` runs the same five kinds at other values, sizes and places
 //! ([`Hidden::others`]: not the values the harness was first run with);
 //! `--short-flight` flies 30 s at 100 Hz (the first 10 s low) instead of 60 s at 200 Hz,
-//! and `--noisy` doubles every sensor's noise in the flights.
+//! `--noisy` doubles every sensor's noise in the flights, and `--iris` flies the
+//! second airframe ([`independent::score::iris`]: 1.5 kg, 10-inch rotors, a
+//! rectangular ×) instead of the shipped 1.2 kg quadrotor ×.
 
 #[path = "../tests/independent/mod.rs"]
 mod independent;
@@ -24,8 +26,8 @@ use std::time::Instant;
 use independent::effects::Hidden;
 use independent::flight::FlightConfig;
 use independent::score::{
-    Case, DataKind, Naming, Score, cases, data_flown, diagnose, effect_size, expected_kind, score,
-    vehicle,
+    Case, DataKind, Naming, Score, cases, data_flown, diagnose, effect_size, expected_kind, iris,
+    score, vehicle,
 };
 use mrsysid::internals::diagnose::Diagnosis;
 
@@ -58,7 +60,7 @@ fn main() {
     let mut args = all_args.iter().filter(|a| !a.starts_with("--")).cloned();
     let seeds: u64 = args.next().map_or(10, |s| s.parse().expect("seed count"));
     let filter = args.next().unwrap_or_default();
-    let v = vehicle();
+    let v = if flag("--iris") { iris() } else { vehicle() };
     let all = cases(if other_values {
         Hidden::others()
     } else {

@@ -7,9 +7,9 @@
 mod independent;
 
 use independent::effects::Hidden;
-use independent::physics::{Airframe, GRAVITY, LoadState};
+use independent::physics::{Airframe, GRAVITY, LoadState, RotorCoefficients, Scale};
 use independent::score::{
-    Case, DataKind, Naming, Score, data, diagnose, effect_size, expected_kind, score, vehicle,
+    Case, DataKind, Naming, Score, data, diagnose, effect_size, expected_kind, iris, score, vehicle,
 };
 use independent::surface::FORCE_NOISE;
 use mrsysid::internals::diagnose::Diagnosis;
@@ -112,6 +112,59 @@ fn the_independent_model_hovers_and_its_effects_act_where_stated() {
     assert!(
         (ratio - (1.0 + 0.3 * (-1.0f64).exp())).abs() < 1e-12,
         "{ratio}"
+    );
+}
+
+/// The second airframe (the Gazebo iris: 1.5 kg, 10-inch rotors, a rectangular ×) is
+/// the reference grown by similarity: the reference's scale is exactly 1 (so its data
+/// are the same to the bit), the iris's rotor has the reference's dimensionless
+/// coefficients, and, independently of how the coefficients were scaled, its hover tip
+/// speed relates to the reference's as the hover induced velocities do (momentum
+/// theory: T = C_T ρ A (ΩR)² and ν_h² = T / (2 ρ A), so (ΩR)_h² = 2 ν_h² / C_T).
+#[test]
+fn the_second_airframe_is_the_reference_grown_by_similarity() {
+    let reference = Airframe::new(&vehicle(), None);
+    assert_eq!(
+        reference.scale,
+        Scale {
+            length: 1.0,
+            density: 1.0,
+            mass: 1.0,
+            inertia: [1.0; 3],
+            inertia_sum: 1.0,
+            induced: 1.0,
+        }
+    );
+    assert_eq!(reference.rotor, RotorCoefficients::default());
+    let big = Airframe::new(&iris(), None);
+    let pi = std::f64::consts::PI;
+    let dimensionless = |a: &Airframe| {
+        let (c, rho, r) = (&a.rotor, a.rho, a.radius);
+        [
+            c.k_t / (rho * pi * r.powi(4)),
+            c.k_q / (rho * pi * r.powi(5)),
+            c.k_h / (rho * pi * r.powi(3)),
+            c.k_h2 / (rho * r.powi(2)),
+            c.k_r / (rho * pi * r.powi(4)),
+        ]
+    };
+    for (a, b) in dimensionless(&big).iter().zip(dimensionless(&reference)) {
+        assert!((a / b - 1.0).abs() < 1e-12, "{a} against {b}");
+    }
+    let induced = |a: &Airframe| {
+        let thrust = a.mass * GRAVITY / a.hubs.len() as f64;
+        (thrust / (2.0 * a.rho * pi * a.radius * a.radius)).sqrt()
+    };
+    let tip = |a: &Airframe| a.hover_omega() * a.radius;
+    // Round-off only.
+    let ratio = (tip(&big) / tip(&reference)) / (induced(&big) / induced(&reference));
+    assert!((ratio - 1.0).abs() < 1e-12, "{ratio}");
+    assert!((big.scale.induced / (induced(&big) / induced(&reference)) - 1.0).abs() < 1e-12);
+    // A larger, slower rotor: 128 mm at ~500 rad/s against 63.5 mm at ~1800 rad/s.
+    assert!(
+        (400.0..600.0).contains(&big.hover_omega()),
+        "{}",
+        big.hover_omega()
     );
 }
 
@@ -254,4 +307,42 @@ fn flight_names_a_ground_effect_reaching_higher_than_cheeseman_bennett() {
         fz(&d),
         fz(&clean)
     );
+}
+
+/// The noisy flight on the second airframe (the Gazebo iris, 1.5 kg, 10-inch rotors at
+/// ~500 rad/s, arms 0.13 m fore and aft and 0.20–0.22 m to the side) at one seed: the
+/// rear-rotor wake, the drag off the CG and the exponential ground effect are named in
+/// their forms with nothing beyond what the clean flight gets. Measured over ten seeds
+/// (42000–42009) in both value sets: every effect named at 10 of 10 but the drag of the
+/// harness's values (9: at 42001 it pays under the importance bar), never a term beyond
+/// the clean flight; one allowed here as above.
+#[test]
+fn second_airframe_flight_names_wake_drag_and_ground_effect() {
+    let v = iris();
+    let diagnosed = |hidden: Option<Hidden>| {
+        let case = Case {
+            data: DataKind::Flight,
+            hidden,
+        };
+        diagnose(&v, &case.label(), data(&v, &case, SEED))
+    };
+    let clean = diagnosed(None);
+    for (label, named_as) in [
+        ("rear-rotor wake", "rotor-wake interaction, forward flight"),
+        (
+            "quadratic airframe drag",
+            "quadratic airframe drag, off the CG",
+        ),
+        ("ground effect", ""),
+    ] {
+        let h = hidden(label);
+        let d = diagnosed(Some(h));
+        println!("{label}: {:?}", d.findings);
+        let s = score(&d, &clean, Some(expected_kind(&h)));
+        match &s.naming {
+            Naming::Added(name) => assert!(name.starts_with(named_as), "{label}: {name}"),
+            other => panic!("{label}: {other:?}, added {:?}", s.added),
+        }
+        assert!(s.beyond_clean.len() <= 1, "{label}: {:?}", s.beyond_clean);
+    }
 }

@@ -95,8 +95,9 @@ struct SetPoint {
     max_accel: f64,
 }
 
-/// Set points drawn for the whole flight.
-fn schedule(cfg: &FlightConfig, rng: &mut StdRng) -> Vec<SetPoint> {
+/// Set points drawn for the whole flight (the low altitudes in proportion to the rotor
+/// radius, `length`: the reference's rotor radii).
+fn schedule(cfg: &FlightConfig, length: f64, rng: &mut StdRng) -> Vec<SetPoint> {
     let mut out = Vec::new();
     let mut t = 0.0;
     while t < cfg.duration {
@@ -114,7 +115,7 @@ fn schedule(cfg: &FlightConfig, rng: &mut StdRng) -> Vec<SetPoint> {
             start: t,
             velocity_ne: [v * heading.cos(), v * heading.sin()],
             altitude: if low {
-                rng.random_range(0.08..0.25)
+                rng.random_range(0.08 * length..0.25 * length)
             } else {
                 rng.random_range(2.0..8.0)
             },
@@ -210,7 +211,9 @@ impl Controller {
         self.yaw_rate_sp += smooth * (sp.yaw_rate - self.yaw_rate_sp);
         self.heading += self.yaw_rate_sp * STEP;
         let altitude = -s.position.z;
-        let climb_sp = (1.5 * (self.altitude_sp - altitude)).clamp(-2.5, 3.5);
+        // Descents under a quarter of the hover induced velocity (2.5 m/s on the
+        // reference quadrotor): far from the vortex ring, which the model lacks.
+        let climb_sp = (1.5 * (self.altitude_sp - altitude)).clamp(-2.5 * air.scale.induced, 3.5);
         let climb_error = climb_sp + s.velocity.z;
         self.climb_integral = (self.climb_integral + climb_error * STEP).clamp(-2.0, 2.0);
         let climb_accel = 4.0 * climb_error + 3.0 * self.climb_integral;
@@ -240,8 +243,9 @@ impl Controller {
         let e_w = s.rates - rate_sp;
         self.integral = (self.integral + e_w * STEP).map(|x| x.clamp(-1.0, 1.0));
         let i = &air.inertia;
-        let k_p = Vector3::new(0.15, 0.16, 0.06);
-        let k_i = Vector3::new(0.3, 0.3, 0.05);
+        let inertia = Vector3::from(air.scale.inertia);
+        let k_p = Vector3::new(0.15, 0.16, 0.06).component_mul(&inertia);
+        let k_i = Vector3::new(0.3, 0.3, 0.05).component_mul(&inertia);
         let moment = -k_p.component_mul(&e_w) - k_i.component_mul(&self.integral)
             + s.rates.cross(&(i * s.rates))
             + Vector3::new(excitation[1], excitation[2], excitation[3]);
@@ -264,13 +268,25 @@ impl Controller {
 pub fn fly(air: &Airframe, cfg: &FlightConfig, seed: u64) -> Vec<Sample> {
     let mut plan = StdRng::seed_from_u64(seed);
     let mut noise = StdRng::seed_from_u64(seed ^ 0xf119_470b);
-    let set_points = schedule(cfg, &mut plan);
-    let excitation = [1.0, 0.06, 0.06, 0.015].map(|rms| Multisine::new(rms, &mut plan));
-    let gyro_bias = Vector3::from_fn(|_, _| cfg.noise_scale * NOISE.gyro_bias * gauss(&mut noise));
+    let scale = air.scale;
+    let set_points = schedule(cfg, scale.length, &mut plan);
+    // Thrust excitation in proportion to the mass, moments to the inertias.
+    let excitation = [
+        1.0 * scale.mass,
+        0.06 * scale.inertia[0],
+        0.06 * scale.inertia[1],
+        0.015 * scale.inertia[2],
+    ]
+    .map(|rms| Multisine::new(rms, &mut plan));
+    let sensors = Sensors {
+        gyro_bias: Vector3::from_fn(|_, _| cfg.noise_scale * NOISE.gyro_bias * gauss(&mut noise)),
+        force: NOISE.force * scale.mass,
+        moment: NOISE.moment * scale.inertia_sum,
+    };
     // A draw of sensor noise of standard deviation `sd` (scaled by the configuration).
     let mut draw = |sd: f64| cfg.noise_scale * sd * gauss(&mut noise);
     let hover = air.hover_omega();
-    let start_altitude = 0.25;
+    let start_altitude = 0.25 * scale.length;
     let mut s = State {
         position: Vector3::new(0.0, 0.0, -start_altitude),
         velocity: Vector3::zeros(),
@@ -300,7 +316,7 @@ pub fn fly(air: &Airframe, cfg: &FlightConfig, seed: u64) -> Vec<Sample> {
         let body_velocity = s.attitude.inverse() * s.velocity;
         let height = -s.position.z;
         assert!(
-            height > 0.02,
+            height > 0.02 * scale.length,
             "seed {seed}: the flight touched the ground at {t} s"
         );
         let wrench = air.wrench(&LoadState {
@@ -318,7 +334,7 @@ pub fn fly(air: &Airframe, cfg: &FlightConfig, seed: u64) -> Vec<Sample> {
                 body_velocity,
                 &omega_dot,
                 wrench,
-                gyro_bias,
+                &sensors,
                 &mut draw,
             ));
         }
@@ -337,6 +353,16 @@ pub fn fly(air: &Airframe, cfg: &FlightConfig, seed: u64) -> Vec<Sample> {
     out
 }
 
+/// What a flight's sensors add beyond [`NOISE`]: the gyro's bias, and the load
+/// estimates' noise, which the accelerometer's and the differentiated gyro's noise
+/// carry times the mass and the inertia (standard deviations before the flight's
+/// `noise_scale`).
+struct Sensors {
+    gyro_bias: Vector3<f64>,
+    force: f64,
+    moment: f64,
+}
+
 /// One logged sample of the true state with sensor noise.
 fn log_sample(
     t: f64,
@@ -344,16 +370,16 @@ fn log_sample(
     body_velocity: Vector3<f64>,
     omega_dot: &[f64],
     wrench: [f64; 6],
-    gyro_bias: Vector3<f64>,
+    sensors: &Sensors,
     n: &mut impl FnMut(f64) -> f64,
 ) -> Sample {
     let velocity = body_velocity.map(|x| x + n(NOISE.velocity));
-    let rates = (s.rates + gyro_bias).map(|x| x + n(NOISE.gyro));
+    let rates = (s.rates + sensors.gyro_bias).map(|x| x + n(NOISE.gyro));
     let omega = s.omega.iter().map(|w| w + n(NOISE.omega)).collect();
     let omega_dot = omega_dot.iter().map(|w| w + n(NOISE.omega_dot)).collect();
     let mut measured = wrench;
     for (j, f) in measured.iter_mut().enumerate() {
-        *f += n(if j < 3 { NOISE.force } else { NOISE.moment });
+        *f += n(if j < 3 { sensors.force } else { sensors.moment });
     }
     let q = s.attitude.quaternion();
     Sample {

@@ -1,7 +1,9 @@
 //! A second, independent source of truth for the diagnosis: a simple multirotor model
 //! written for the tests (its own rotor formula, airframe, controller and sensors; the
 //! crate's truth simulator `mrsysid::internals::sim` is not used), five hidden effects in forms of
-//! its own, and a harness that scores the product's diagnosis on them.
+//! its own, and a harness that scores the product's diagnosis on them. It flies the
+//! shipped quadrotor × and, grown by similarity to its size, the shipped Gazebo iris
+//! ([`physics::Scale`]).
 //!
 //! - [`physics`]: the rotor and airframe loads;
 //! - [`effects`]: the hidden effects;

@@ -23,9 +23,10 @@ use super::effects::Hidden;
 /// Standard gravity, m/s².
 pub const GRAVITY: f64 = 9.80665;
 
-/// Rotor coefficients of the independent model (a 5-inch propeller turning ~1800 rad/s
-/// in hover on the 1.2 kg quadrotor).
-#[derive(Debug, Clone, Copy)]
+/// Rotor coefficients of the independent model (by default a 5-inch propeller turning
+/// ~1800 rad/s in hover on the 1.2 kg quadrotor; [`RotorCoefficients::scaled`] for
+/// other sizes).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RotorCoefficients {
     /// Static thrust coefficient k_T, N s².
     pub k_t: f64,
@@ -49,6 +50,68 @@ pub struct RotorCoefficients {
     pub k_r: f64,
     /// Motor time constant, s.
     pub motor_tau: f64,
+}
+
+/// How a vehicle's size compares with the shipped quadrotor × the harness was written for
+/// (1.2 kg, R = 63.5 mm, inertia diag(0.011, 0.012, 0.021) kg m², four rotors, air at
+/// 1.225 kg/m³): every ratio is exactly 1 for that vehicle, so its data are the same to
+/// the bit whichever way they are scaled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scale {
+    /// Rotor radius over 63.5 mm (-).
+    pub length: f64,
+    /// Air density over 1.225 kg/m³ (-).
+    pub density: f64,
+    /// Mass over 1.2 kg (-).
+    pub mass: f64,
+    /// Principal inertias over (0.011, 0.012, 0.021) kg m² (-).
+    pub inertia: [f64; 3],
+    /// The sum of the principal inertias over 0.044 kg m² (-).
+    pub inertia_sum: f64,
+    /// Hover induced velocity over the reference's, √(m g / (2 ρ n π R²)) (-).
+    pub induced: f64,
+}
+
+impl Scale {
+    /// `vehicle` against the reference quadrotor.
+    pub fn of(vehicle: &Vehicle) -> Self {
+        let p = &vehicle.props;
+        let (radius, density, mass, rotors) = (0.0635, 1.225, 1.2, 4.0);
+        let inertia = [0.011, 0.012, 0.021];
+        let length = p.rotor_radius / radius;
+        let density_ratio = p.air_density / density;
+        let mass_ratio = p.mass / mass;
+        let n = vehicle.rotors().len() as f64;
+        Self {
+            length,
+            density: density_ratio,
+            mass: mass_ratio,
+            inertia: std::array::from_fn(|k| p.inertia[k][k] / inertia[k]),
+            inertia_sum: (p.inertia[0][0] + p.inertia[1][1] + p.inertia[2][2])
+                / (inertia[0] + inertia[1] + inertia[2]),
+            induced: (mass_ratio * (rotors / n) / (density_ratio * length * length)).sqrt(),
+        }
+    }
+}
+
+impl RotorCoefficients {
+    /// The default rotor grown to `scale` by similarity: the same thrust, torque,
+    /// H-force and hub-moment coefficients in ρ, Ω and R (k_T and k_R ∝ ρR⁴, k_Q ∝ ρR⁵,
+    /// k_H ∝ ρR³, the profile term ∝ ρR²), the same dimensionless climb and edgewise
+    /// corrections, and a motor time constant ∝ √R.
+    pub fn scaled(scale: &Scale) -> Self {
+        let d = Self::default();
+        let (r, rho) = (scale.length, scale.density);
+        Self {
+            k_t: d.k_t * rho * r.powi(4),
+            k_q: d.k_q * rho * r.powi(5),
+            k_h: d.k_h * rho * r.powi(3),
+            k_h2: d.k_h2 * rho * r.powi(2),
+            k_r: d.k_r * rho * r.powi(4),
+            motor_tau: d.motor_tau * r.sqrt(),
+            ..d
+        }
+    }
 }
 
 impl Default for RotorCoefficients {
@@ -110,6 +173,9 @@ pub struct Airframe {
     pub rotor: RotorCoefficients,
     /// The hidden effect, if any.
     pub hidden: Option<Hidden>,
+    /// The vehicle's size against the reference quadrotor (controller, excitation,
+    /// envelope and noise scale with it).
+    pub scale: Scale,
 }
 
 impl Airframe {
@@ -125,6 +191,7 @@ impl Airframe {
             Some(Hidden::CgOffset { offset }) => Vector3::from(offset),
             _ => Vector3::zeros(),
         };
+        let scale = Scale::of(vehicle);
         Self {
             mass: p.mass,
             inertia: Matrix3::from_fn(|i, j| p.inertia[i][j]),
@@ -134,8 +201,9 @@ impl Airframe {
             hubs: nominal_hubs.iter().map(|h| h - cg).collect(),
             nominal_hubs,
             spins: vehicle.rotors().iter().map(|r| r.spin).collect(),
-            rotor: RotorCoefficients::default(),
+            rotor: RotorCoefficients::scaled(&scale),
             hidden,
+            scale,
         }
     }
 

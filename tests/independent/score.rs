@@ -72,10 +72,23 @@ pub fn cases(effects: [Hidden; 5]) -> Vec<Case> {
     out
 }
 
-/// The shipped quadrotor × (`data/vehicles/quad_x.toml`).
+/// The shipped quadrotor × (`data/vehicles/quad_x.toml`), the harness's reference.
 pub fn vehicle() -> Vehicle {
+    shipped_vehicle("quad_x")
+}
+
+/// A second airframe of another size and layout: the shipped Gazebo iris
+/// (`data/vehicles/gazebo_iris.toml`: 1.5 kg, R = 128 mm, arms 0.13 m fore and aft and
+/// 0.20–0.22 m to the side), its rotors, controller, envelope and noise scaled from the
+/// reference ([`super::physics::Scale`]).
+pub fn iris() -> Vehicle {
+    shipped_vehicle("gazebo_iris")
+}
+
+/// `data/vehicles/<name>.toml`.
+fn shipped_vehicle(name: &str) -> Vehicle {
     Vehicle::from_toml_file(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("data/vehicles/quad_x.toml"),
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("data/vehicles/{name}.toml")),
     )
     .expect("shipped vehicle")
 }
