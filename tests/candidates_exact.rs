@@ -11,7 +11,7 @@ use mrsysid::internals::airframe::closed_form_wrench;
 use mrsysid::internals::diagnose::{Candidate, CandidateContext, EffectKind, library};
 use mrsysid::internals::util::cross;
 use mrsysid::internals::util::quat_to_matrix;
-use mrsysid::vehicle::{Preset, Vehicle};
+use mrsysid::vehicle::{Preset, Rotor, Vehicle};
 use mrsysid::{ModelOptions, ModelStructure};
 use rand::rngs::StdRng;
 use rand::{RngExt, SeedableRng};
@@ -285,14 +285,38 @@ fn second_order_inflow_columns_are_exact() {
 }
 
 #[test]
-fn cg_offset_columns_are_exact() {
+fn cg_offset_columns_are_first_order_exact() {
+    // The truth: the same airframe with every hub at r_i − d from the CG, in the closed
+    // form (moments about the CG, each rotor's inflow from its own hub's climb velocity
+    // w + p y_i − q x_i, Eq. 18). The candidate is first order in d: the lever arms
+    // F̂ × d, and the climb velocity change q dx − p dy through the model's gradient in
+    // w. The forces are linear in the hub positions, so exact; the moments leave
+    // (force change) × d, second order: 2.3e-3 of the effect here (measured, and a
+    // sixteenth of the moments' error at a quarter of d). The lever arms alone leave
+    // 0.29 (measured): F_z's inflow change, which the bound catches.
     let v = vehicle(Preset::QuadX);
-    let d = [0.004, -0.008, 0.0];
-    let e = check(&v, EffectKind::CgOffset, &[d[0], d[1]], |_, b| {
-        let m = cross([b[0], b[1], b[2]], d);
-        [b[0], b[1], b[2], b[3] + m[0], b[4] + m[1], b[5] + m[2]]
+    let d = [0.004, -0.008];
+    let rotors = v
+        .rotors()
+        .iter()
+        .map(|r| Rotor {
+            x: r.x - d[0],
+            y: r.y - d[1],
+            ..*r
+        })
+        .collect();
+    let shifted = Vehicle::from_rotors("CG off", v.props.clone(), rotors).unwrap();
+    let e = check(&v, EffectKind::CgOffset, &d, |s, _| {
+        closed_form_wrench(
+            &shifted,
+            &BLADE,
+            s.velocity,
+            s.rates,
+            &s.omega,
+            &s.omega_dot,
+        )
     });
-    assert!(e < 1e-9, "{e:e}");
+    assert!(e < 5e-3, "{e:e}");
 }
 
 #[test]

@@ -1,23 +1,46 @@
-//! CG offset in the rotor plane: ΔM = F̂ × d for a CG at d = (dx, dy) from the reference
-//! point (moments about the true CG), F̂ the base model's force.
+//! CG offset in the rotor plane, to first order in the offset d = (dx, dy) of the CG from
+//! the reference point the rotor positions are given from:
+//!
+//! - the lever arms: moments about the true CG gain ΔM = F̂ × d, F̂ the base model's
+//!   force;
+//! - the rotors' inflow: every hub sits at r_i − d from the true CG, so its climb
+//!   velocity w + p y_i − q x_i (Eq. 18) differs from the model's by q dx − p dy, the
+//!   same for every rotor, and every load changes by (∂F̂/∂w)(q dx − p dy), ∂F̂/∂w the
+//!   base model's gradient in w. (The hubs' in-plane velocities would change by
+//!   (r dy, −r dx) too, but Eq. 22 takes every rotor's in-plane velocity as the CG's.)
+//!
+//! The forces are linear in the hub positions, so their columns are exact; the moments
+//! leave the force change times d, second order (`tests/candidates_exact.rs`).
 
 use super::context::{CandidateContext, column};
 use crate::diagnose::candidate::{Candidate, CandidateParameter, EffectKind as Kind, Role};
-use crate::model::Column;
+use crate::model::{Column, Signal, Term};
 use crate::sample::Axis;
 
-const PHYSICS: &str = "With the CG at (dx, dy) from the reference point, the thrust acts on a lever arm: M gains F x d.";
+const PHYSICS: &str = "With the CG at (dx, dy) from the reference point, the thrust acts on a lever arm (M gains F x d), and each rotor climbs with the body rates about the true CG, by q dx - p dy more than about the reference point, which changes its inflow and thrust.";
 
 /// The offset's two components.
 pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
-    let dx = vec![
-        column(Axis::My, "Fz_model", ctx.model_force(Axis::Fz, 1.0)),
-        column(Axis::Mz, "-Fy_model", ctx.model_force(Axis::Fy, -1.0)),
-    ];
-    let dy = vec![
-        column(Axis::Mx, "-Fz_model", ctx.model_force(Axis::Fz, -1.0)),
-        column(Axis::Mz, "Fx_model", ctx.model_force(Axis::Fx, 1.0)),
-    ];
+    // Per unit dx: ΔM_y = F̂_z, ΔM_z = −F̂_y; the climb velocity gains q.
+    let dx = with_inflow(
+        ctx,
+        vec![
+            column(Axis::My, "Fz_model", ctx.model_force(Axis::Fz, 1.0)),
+            column(Axis::Mz, "-Fy_model", ctx.model_force(Axis::Fy, -1.0)),
+        ],
+        1.0,
+        Signal::Q,
+    );
+    // Per unit dy: ΔM_x = −F̂_z, ΔM_z = F̂_x; the climb velocity gains −p.
+    let dy = with_inflow(
+        ctx,
+        vec![
+            column(Axis::Mx, "-Fz_model", ctx.model_force(Axis::Fz, -1.0)),
+            column(Axis::Mz, "Fx_model", ctx.model_force(Axis::Fx, 1.0)),
+        ],
+        -1.0,
+        Signal::P,
+    );
     let parameters = vec![displacement("cg_dx", dx), displacement("cg_dy", dy)];
     vec![Candidate::new(
         Kind::CgOffset,
@@ -26,6 +49,31 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
         PHYSICS,
         parameters,
     )]
+}
+
+/// The lever-arm columns `lever` of one offset component with, on every axis, the base
+/// model's gradient in w times the climb velocity change per unit offset, `sign` ·
+/// `rate`.
+fn with_inflow(ctx: &CandidateContext, lever: Vec<Column>, sign: f64, rate: Signal) -> Vec<Column> {
+    Axis::ALL
+        .iter()
+        .map(|&axis| {
+            let mut c = lever
+                .iter()
+                .find(|c| c.axis == axis)
+                .cloned()
+                .unwrap_or_else(|| column(axis, "dF/dw*dw", Vec::new()));
+            c.terms.extend(
+                ctx.model_velocity_gradient(axis, 2)
+                    .into_iter()
+                    .map(|t| Term {
+                        coef: sign * t.coef,
+                        factors: t.factors.iter().copied().chain([rate]).collect(),
+                    }),
+            );
+            c
+        })
+        .collect()
 }
 
 /// A CG displacement (m), plausible within ±0.2 m, with those of `columns` that have
