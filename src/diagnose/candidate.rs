@@ -127,12 +127,16 @@ pub enum Statement {
     },
     /// As the name with the centre of pressure of a drag acting off the CG: the distance
     /// z_cp (m, body z, below the CG positive) that best relates the moment areas
-    /// m = z_cp A to the areas A in least squares, z_cp = Σ m A / Σ A², shown in mm.
+    /// m = z_cp A to the areas A in least squares, z_cp = Σ m A / Σ A², shown in mm; "not
+    /// resolved" when it lies farther than `max` from the CG (areas too small to place
+    /// it).
     CentreOfPressure {
         /// Indices of the areas A (m²).
         areas: [usize; 2],
         /// Indices of the moment areas z_cp A (m³), in the order of `areas`.
         moments: [usize; 2],
+        /// Largest plausible |z_cp|, m.
+        max: f64,
     },
 }
 
@@ -319,7 +323,11 @@ impl Candidate {
                 }
                 None => self.name.clone(),
             },
-            Statement::CentreOfPressure { areas, moments } => {
+            Statement::CentreOfPressure {
+                areas,
+                moments,
+                max,
+            } => {
                 let value = |k: &usize| estimates.get(*k).copied();
                 let pairs: Option<Vec<(f64, f64)>> = areas
                     .iter()
@@ -335,6 +343,14 @@ impl Candidate {
                     return self.name.clone();
                 }
                 let side = if z < 0.0 { "above" } else { "below" };
+                if z.abs() > *max {
+                    return format!(
+                        "{}, centre of pressure not resolved (least squares put it {:.1} m \
+                         {side} the CG, beyond {max} m)",
+                        self.name,
+                        z.abs()
+                    );
+                }
                 format!(
                     "{}, centre of pressure {:.0} mm {side} the CG",
                     self.name,
@@ -380,6 +396,7 @@ mod tests {
         let c = stated(Statement::CentreOfPressure {
             areas: [0, 1],
             moments: [3, 4],
+            max: 0.5,
         });
         // Moment areas z A with z = −15 mm (above the CG) on both axes, then one that
         // disagrees: the least-squares z_cp = Σ m A / Σ A².
@@ -395,6 +412,12 @@ mod tests {
                 "weak rotor 3, centre of pressure {:.0} mm below the CG",
                 1000.0 * z
             )
+        );
+        // Areas too small to place it: 1.8 m below the CG, beyond the 0.5 m allowed.
+        assert_eq!(
+            c.describe(&[1e-4, 0.0, 0.017, 1.8e-4, 0.0]),
+            "weak rotor 3, centre of pressure not resolved (least squares put it 1.8 m \
+             below the CG, beyond 0.5 m)"
         );
         // Without its estimates, or with no area: the name.
         assert_eq!(c.describe(&[ax, ay, 0.03]), "weak rotor 3");

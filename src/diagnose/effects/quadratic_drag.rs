@@ -98,6 +98,7 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
         .stated_as(Statement::CentreOfPressure {
             areas: [1, 0],
             moments: [3, 4],
+            max: CENTRE_OF_PRESSURE_MAX,
         }),
     ]
 }
