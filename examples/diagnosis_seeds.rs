@@ -271,6 +271,9 @@ fn main() {
                 "    added: {:?}",
                 d.effects_added.iter().map(|e| &e.name).collect::<Vec<_>>()
             );
+            if !d.below_bar.is_empty() {
+                println!("    below the bar: {:?}", d.below_bar);
+            }
             if std::env::var_os("VERBOSE").is_some() {
                 print_details(&d);
             }

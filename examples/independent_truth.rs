@@ -39,6 +39,7 @@ const FIRST_SEED: u64 = 42_000;
 struct Tally {
     added: usize,
     look_alike: usize,
+    below_bar: usize,
     most_beyond_effect: usize,
     most_beyond_clean: usize,
     total_beyond_clean: usize,
@@ -94,6 +95,7 @@ fn main() {
             match s.naming {
                 Naming::Added(_) => t.added += 1,
                 Naming::LookAlike(_) => t.look_alike += 1,
+                Naming::BelowBar(_) => t.below_bar += 1,
                 Naming::Missed => {}
             }
             t.most_beyond_effect = t.most_beyond_effect.max(s.beyond_effect.len());
@@ -102,18 +104,19 @@ fn main() {
         }
     }
     println!(
-        "\n| case | named (added + look-alike) | most terms beyond the effect | most beyond the clean set | sum beyond the clean set |"
+        "\n| case | named (added + look-alike + below the bar) | most terms beyond the effect | most beyond the clean set | sum beyond the clean set |"
     );
     println!("| --- | --- | --- | --- | --- |");
     for case in &wanted {
         let t = &tallies[&case.label()];
         let named = if case.hidden.is_some() {
             format!(
-                "{} of {} ({} + {})",
-                t.added + t.look_alike,
+                "{} of {} ({} + {} + {})",
+                t.added + t.look_alike + t.below_bar,
                 t.seeds,
                 t.added,
-                t.look_alike
+                t.look_alike,
+                t.below_bar
             )
         } else {
             "—".into()
@@ -151,6 +154,7 @@ fn report(case: &Case, seed: u64, d: &Diagnosis, s: &Score) {
         (_, None) => "clean".to_string(),
         (Naming::Added(n), _) => format!("NAMED ({n})"),
         (Naming::LookAlike(n), _) => format!("LOOK-ALIKE ({n})"),
+        (Naming::BelowBar(n), _) => format!("BELOW THE BAR ({n})"),
         (Naming::Missed, _) => "MISSED".to_string(),
     };
     println!(
@@ -162,6 +166,9 @@ fn report(case: &Case, seed: u64, d: &Diagnosis, s: &Score) {
     );
     println!("    added: {:?}", s.added);
     println!("    findings: {:?}", d.findings);
+    if !d.below_bar.is_empty() {
+        println!("    below the bar: {:?}", d.below_bar);
+    }
     let rmse = |m: &[mrsysid::AxisMetrics; 6]| m.map(|a| format!("{:.3}", a.rmse));
     println!(
         "    held-out RMSE Fx..Mz: Eq. 22 {:?}, final {:?}",

@@ -7,9 +7,11 @@
 mod independent;
 
 use independent::effects::Hidden;
+use independent::flight::FlightConfig;
 use independent::physics::{Airframe, GRAVITY, LoadState, RotorCoefficients, Scale};
 use independent::score::{
-    Case, DataKind, Naming, Score, data, diagnose, effect_size, expected_kind, iris, score, vehicle,
+    Case, DataKind, Naming, Score, data, data_flown, diagnose, effect_size, expected_kind, iris,
+    score, vehicle,
 };
 use independent::surface::FORCE_NOISE;
 use mrsysid::internals::diagnose::Diagnosis;
@@ -370,4 +372,38 @@ fn second_airframe_surface_cg_offset_leaves_no_inflow_term() {
     let s = score(&d, &clean, Some(expected_kind(&h)));
     assert_eq!(s.naming, Naming::Added("CG offset".into()));
     assert!(s.beyond_clean.is_empty(), "{:?}", s.beyond_clean);
+}
+
+/// The drag in the flight with every sensor's noise doubled, at a seed where it is not
+/// added: the off-the-CG form is significant (P ~ 1e-247) and predictive (held-out
+/// likelihood ratio 1592) but gains 4.5 % on F_z against the 5 % bar, since the noise
+/// inflates the NRMSE the gain is relative to. Nothing is added, so the diagnosis
+/// reports it as present below the bar rather than saying nothing; the clean flight of
+/// the same seed and noise has nothing to report. Measured over ten seeds: the drag is
+/// added at 6 and reported below the bar at the other 4; no clean flight reports one.
+#[test]
+fn a_drag_under_the_bar_in_a_noisy_flight_is_reported_below_it() {
+    let v = vehicle();
+    let noisy = FlightConfig {
+        noise_scale: 2.0,
+        ..FlightConfig::default()
+    };
+    let diagnosed = |hidden: Option<Hidden>| {
+        let case = Case {
+            data: DataKind::Flight,
+            hidden,
+        };
+        diagnose(&v, &case.label(), data_flown(&v, &case, SEED, &noisy))
+    };
+    let clean = diagnosed(None);
+    assert!(clean.below_bar.is_empty(), "{:?}", clean.below_bar);
+    let h = hidden("quadratic airframe drag");
+    let d = diagnosed(Some(h));
+    println!("{:?}", d.below_bar);
+    let s = score(&d, &clean, Some(expected_kind(&h)));
+    assert!(s.added.is_empty(), "{:?}", s.added);
+    assert_eq!(
+        s.naming,
+        Naming::BelowBar("quadratic airframe drag, off the CG".into())
+    );
 }

@@ -173,6 +173,9 @@ pub struct DiagnosisReport {
     /// One sentence per effect added, with what the data cannot separate it from.
     #[serde(default)]
     pub findings: Vec<String>,
+    /// Named effects the data show that gain too little to be added, one sentence each.
+    #[serde(default)]
+    pub below_bar: Vec<String>,
     /// The search stopped at its effect limit with candidates left.
     #[serde(default)]
     pub stopped_at_limit: bool,
@@ -390,6 +393,7 @@ impl From<&Diagnosis> for DiagnosisReport {
                 })
                 .collect(),
             findings: d.findings.clone(),
+            below_bar: d.below_bar.clone(),
             stopped_at_limit: d.stopped_at_limit,
             remainder: d.remainder.clone(),
             eq22_axes: d.eq22.as_ref().map_or_else(Vec::new, |e| {

@@ -97,6 +97,9 @@ pub fn render_diagnosis(d: &DiagnosisReport) -> String {
     for f in &d.findings {
         let _ = writeln!(out, "  finding: {f}");
     }
+    for f in &d.below_bar {
+        let _ = writeln!(out, "  present, below the importance bar: {f}");
+    }
     for e in &d.effects_added {
         let axes: Vec<&str> = e.axes.iter().map(|a| a.name()).collect();
         let what = if e.model_completion {

@@ -170,6 +170,8 @@ pub enum Naming {
     /// A candidate of the right kind is named in a finding as explaining about as much
     /// as an added effect (its name).
     LookAlike(String),
+    /// Not added, but reported as present below the importance bar (its name).
+    BelowBar(String),
     /// Not named.
     Missed,
 }
@@ -211,7 +213,10 @@ pub fn score(d: &Diagnosis, clean: &Diagnosis, target: Option<EffectKind>) -> Sc
     let naming = if let Some(e) = d.effects_added.iter().find(|e| is_target(e)) {
         Naming::Added(e.name.clone())
     } else {
-        look_alike(d, &is_target).map_or(Naming::Missed, Naming::LookAlike)
+        look_alike(d, &is_target)
+            .map(Naming::LookAlike)
+            .or_else(|| below_bar(d, &is_target).map(Naming::BelowBar))
+            .unwrap_or(Naming::Missed)
     };
     Score {
         naming,
@@ -219,6 +224,19 @@ pub fn score(d: &Diagnosis, clean: &Diagnosis, target: Option<EffectKind>) -> Sc
         beyond_effect,
         beyond_clean,
     }
+}
+
+/// The first candidate satisfying `is_target` (its kind read from the last step's
+/// ranking) that the diagnosis reports as present below the importance bar.
+fn below_bar(d: &Diagnosis, is_target: &dyn Fn(&CandidateScore) -> bool) -> Option<String> {
+    let last = d.steps.last()?;
+    d.below_bar.iter().find_map(|said| {
+        last.ranking
+            .iter()
+            .find(|s| said.starts_with(&format!("{}:", s.name)))
+            .filter(|s| is_target(s))
+            .map(|s| s.name.clone())
+    })
 }
 
 /// The first candidate satisfying `is_target` named as a look-alike of an effect in the

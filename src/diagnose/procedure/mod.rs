@@ -98,9 +98,11 @@
 //! (the forward search, with withdrawals and forms chosen again),
 //! `alternatives` (look-alikes, and candidates not separable from the winner),
 //! `parsimony` (terms left out at the end), `eq22_axes` (the per-axis fallback to Eq.
-//! 22), `findings` (one sentence per effect).
+//! 22), `findings` (one sentence per effect), `below_bar` (named effects the data show
+//! that gain too little to be added).
 
 mod alternatives;
+mod below_bar;
 mod eq22_axes;
 mod findings;
 mod outcome;

@@ -203,6 +203,10 @@ pub struct Diagnosis {
     pub effects_added: Vec<CandidateScore>,
     /// One sentence per effect added, with what the data cannot tell it from.
     pub findings: Vec<String>,
+    /// Named effects the last step found significant, plausible and predictive on
+    /// held-out data that gain too little to be added (but at least half the bar), one
+    /// sentence each (`below_bar`).
+    pub below_bar: Vec<String>,
     /// The search stopped at [`DiagnoseOptions::max_effects`] with candidates left.
     ///
     /// [`DiagnoseOptions::max_effects`]: crate::diagnose::DiagnoseOptions::max_effects

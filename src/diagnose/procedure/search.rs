@@ -4,6 +4,7 @@
 //! the parsimony pass.
 
 use super::alternatives::likeliest_in_band;
+use super::below_bar::below_bar;
 use super::eq22_axes::fall_back_to_eq22;
 use super::findings::{describe, finding};
 use super::outcome::{CandidateScore, DiagnoseError, Diagnosis, DiagnosisStep, Rejection};
@@ -119,10 +120,12 @@ pub fn diagnose_on_threads(
     )?;
     estimate::add_fsoa_tables(&mut fit, &current.structure, &fitted, fit_options)?;
     let before_folds = fold_metrics(&base.cv);
+    let effects_added: Vec<CandidateScore> = in_model.iter().map(|(_, s, _)| s.clone()).collect();
     let mut diagnosis = Diagnosis {
+        below_bar: below_bar(steps.last(), &effects_added, options.min_gain),
         steps,
         findings: in_model.iter().map(|(_, _, said)| said.clone()).collect(),
-        effects_added: in_model.into_iter().map(|(_, s, _)| s).collect(),
+        effects_added,
         stopped_at_limit,
         unsupported,
         folds: stats.folds.names.clone(),
