@@ -14,6 +14,7 @@ use independent::score::{
     score, vehicle,
 };
 use independent::surface::FORCE_NOISE;
+use mrsysid::Vehicle;
 use mrsysid::internals::diagnose::Diagnosis;
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -29,12 +30,33 @@ fn hidden(label: &str) -> Hidden {
 }
 
 fn run(data_kind: DataKind, effect: Option<Hidden>) -> Diagnosis {
-    let v = vehicle();
+    run_on(
+        &vehicle(),
+        data_kind,
+        effect,
+        SEED,
+        &FlightConfig::default(),
+    )
+}
+
+/// The diagnosis of `vehicle`'s data of kind `data_kind` with `effect` at `seed`, a
+/// flight flown as `flight` says.
+fn run_on(
+    vehicle: &Vehicle,
+    data_kind: DataKind,
+    effect: Option<Hidden>,
+    seed: u64,
+    flight: &FlightConfig,
+) -> Diagnosis {
     let case = Case {
         data: data_kind,
         hidden: effect,
     };
-    let d = diagnose(&v, &case.label(), data(&v, &case, SEED));
+    let d = diagnose(
+        vehicle,
+        &case.label(),
+        data_flown(vehicle, &case, seed, flight),
+    );
     println!("{}: {:?}", case.label(), d.findings);
     d
 }
@@ -285,12 +307,14 @@ fn flight_names_cg_offset_and_weak_rotor() {
 fn flight_names_a_ground_effect_reaching_higher_than_cheeseman_bennett() {
     const MISSED_BEFORE: u64 = 42_004;
     let v = vehicle();
-    let diagnosed = |hidden: Option<Hidden>| {
-        let case = Case {
-            data: DataKind::Flight,
+    let diagnosed = |hidden| {
+        run_on(
+            &v,
+            DataKind::Flight,
             hidden,
-        };
-        diagnose(&v, &case.label(), data(&v, &case, MISSED_BEFORE))
+            MISSED_BEFORE,
+            &FlightConfig::default(),
+        )
     };
     let clean = diagnosed(None);
     let ground = Hidden::others()
@@ -321,13 +345,7 @@ fn flight_names_a_ground_effect_reaching_higher_than_cheeseman_bennett() {
 #[test]
 fn second_airframe_flight_names_wake_drag_and_ground_effect() {
     let v = iris();
-    let diagnosed = |hidden: Option<Hidden>| {
-        let case = Case {
-            data: DataKind::Flight,
-            hidden,
-        };
-        diagnose(&v, &case.label(), data(&v, &case, SEED))
-    };
+    let diagnosed = |hidden| run_on(&v, DataKind::Flight, hidden, SEED, &FlightConfig::default());
     let clean = diagnosed(None);
     for (label, named_as) in [
         ("rear-rotor wake", "rotor-wake interaction, forward flight"),
@@ -358,12 +376,14 @@ fn second_airframe_flight_names_wake_drag_and_ground_effect() {
 #[test]
 fn second_airframe_surface_cg_offset_leaves_no_inflow_term() {
     let v = iris();
-    let diagnosed = |hidden: Option<Hidden>| {
-        let case = Case {
-            data: DataKind::Surface,
+    let diagnosed = |hidden| {
+        run_on(
+            &v,
+            DataKind::Surface,
             hidden,
-        };
-        diagnose(&v, &case.label(), data(&v, &case, SEED))
+            SEED,
+            &FlightConfig::default(),
+        )
     };
     let clean = diagnosed(None);
     let h = hidden("CG offset");
@@ -388,13 +408,7 @@ fn a_drag_under_the_bar_in_a_noisy_flight_is_reported_below_it() {
         noise_scale: 2.0,
         ..FlightConfig::default()
     };
-    let diagnosed = |hidden: Option<Hidden>| {
-        let case = Case {
-            data: DataKind::Flight,
-            hidden,
-        };
-        diagnose(&v, &case.label(), data_flown(&v, &case, SEED, &noisy))
-    };
+    let diagnosed = |hidden| run_on(&v, DataKind::Flight, hidden, SEED, &noisy);
     let clean = diagnosed(None);
     assert!(clean.below_bar.is_empty(), "{:?}", clean.below_bar);
     let h = hidden("quadratic airframe drag");
