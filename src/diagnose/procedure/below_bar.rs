@@ -1,14 +1,16 @@
 //! Effects the data show but the importance bar keeps out. A named mechanism that the
 //! last step found significant, plausible and predictive on held-out data, and rejected
-//! only because it gains less than [`DiagnoseOptions::min_gain`] (but at least half of
-//! it: without that floor the clean data of the harnesses report such candidates too,
-//! gaining up to 1.6 %, measured), is reported rather than passed over in silence: the gain is relative to the
-//! residual's NRMSE, which sensor noise inflates, so with noisy loads a physical effect
-//! that the data plainly carry can fall under the bar. It is not added to the model.
-//! Only when the final model has no named mechanism: after an effect that explains the
-//! residual, lesser candidates are not reported (on the seed table's CG-offset sweeps
-//! a weak rotor gaining 2.7 % would be, at one seed). At most one candidate per family,
-//! best first, at most [`MOST`].
+//! only because it gains less than [`DiagnoseOptions::min_gain`], is reported rather
+//! than passed over in silence: the gain is relative to the residual's NRMSE, which
+//! sensor noise inflates, so with noisy loads a physical effect that the data plainly
+//! carry can fall under the bar. It is not added to the model.
+//!
+//! - Its gain must reach half the bar: without that floor the clean data of the
+//!   harnesses report such candidates too, gaining up to 1.6 % (measured).
+//! - Only when the final model has no named mechanism: after an effect that explains the
+//!   residual, lesser candidates are not reported (on the seed table's CG-offset sweeps a
+//!   weak rotor gaining 2.7 % would be, at one seed).
+//! - At most one candidate per family, best first, at most [`MOST`].
 //!
 //! [`DiagnoseOptions::min_gain`]: crate::diagnose::DiagnoseOptions::min_gain
 

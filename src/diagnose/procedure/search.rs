@@ -120,11 +120,12 @@ pub fn diagnose_on_threads(
     )?;
     estimate::add_fsoa_tables(&mut fit, &current.structure, &fitted, fit_options)?;
     let before_folds = fold_metrics(&base.cv);
-    let effects_added: Vec<CandidateScore> = in_model.iter().map(|(_, s, _)| s.clone()).collect();
+    let findings = in_model.iter().map(|(_, _, said)| said.clone()).collect();
+    let effects_added: Vec<CandidateScore> = in_model.into_iter().map(|(_, s, _)| s).collect();
     let mut diagnosis = Diagnosis {
         below_bar: below_bar(steps.last(), &effects_added, options.min_gain),
         steps,
-        findings: in_model.iter().map(|(_, _, said)| said.clone()).collect(),
+        findings,
         effects_added,
         stopped_at_limit,
         unsupported,
