@@ -450,6 +450,69 @@ fn time_in_milliseconds_is_named_and_the_suggested_fix_works() {
     }
 }
 
+/// A test-point sweep whose t numbers its points 0, 1, 2, … (as `mrsysid simulate --mode
+/// sweep` writes it) spans more than a day from 86 401 points on: the shipped sweep's 2000
+/// points written 45 times (90 000, "spanning" 25 h) fit. The same rows with t starting
+/// at 7, which is what a 1 kHz clock in whole ms looks like, are refused as ms; a mapping
+/// declaring seconds is believed.
+#[test]
+fn a_long_numbered_sweep_fits_and_a_declared_time_unit_is_believed() {
+    let d = dir("numbered");
+    let sweep = std::fs::read_to_string(root().join("data/quad_x_sweep.csv")).unwrap();
+    let mut lines = sweep.lines();
+    let header = lines.next().unwrap();
+    let rows: Vec<&str> = lines.map(|l| l.split_once(',').unwrap().1).collect();
+    let numbered = |first: usize| {
+        let mut text = format!("{header}\n");
+        for k in 0..45 * rows.len() {
+            text += &format!("{},{}\n", first + k, rows[k % rows.len()]);
+        }
+        text
+    };
+    let fit = |log: &Path, mapping: Option<&Path>| {
+        let mut args = vec![
+            "fit",
+            s(log),
+            "--vehicle",
+            VEHICLE,
+            "--quiet",
+            "--no-diagnose",
+        ];
+        if let Some(m) = mapping {
+            args.extend(["--mapping", s(m)]);
+        }
+        mrsysid(&args)
+    };
+    let sweep_log = write(&d.join("sweep.csv"), numbered(0));
+    let out = fit(&sweep_log, None);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let clock = write(&d.join("clock.csv"), numbered(7));
+    let out = fit(&clock, None);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    for needle in ["clock.csv", "milliseconds", "unit = \"ms\""] {
+        assert!(err.contains(needle), "missing {needle}: {err}");
+    }
+    let mut mapping = "[time]\ncolumns = [\"t\"]\nunit = \"s\"\n".to_string();
+    for (name, cols) in [
+        ("velocity_body", "u v w"),
+        ("rates", "p q r"),
+        ("rotor_speeds", "omega_1 omega_2 omega_3 omega_4"),
+        (
+            "rotor_accelerations",
+            "omega_dot_1 omega_dot_2 omega_dot_3 omega_dot_4",
+        ),
+        ("force", "fx fy fz"),
+        ("moment", "mx my mz"),
+    ] {
+        let cols: Vec<String> = cols.split(' ').map(|c| format!("\"{c}\"")).collect();
+        mapping += &format!("[signals.{name}]\ncolumns = [{}]\n", cols.join(", "));
+    }
+    let seconds = write(&d.join("seconds.toml"), mapping);
+    let out = fit(&clock, Some(&seconds));
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
 // 7. Logs too short to fit.
 
 /// A header and one data row, a 3 s log, and one row whose moments must be derived: exit

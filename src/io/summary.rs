@@ -63,6 +63,11 @@ pub struct Summary {
     pub median_time_step: Option<f64>,
     /// Time from the first row read to the last, s (0 for a log in memory).
     pub span: f64,
+    /// The time's unit is not suspected of being ms or µs however slow or long the clock
+    /// looks: a mapping declared it, or t numbers the rows 0, 1, 2, … (a test-point
+    /// sweep).
+    #[serde(default)]
+    pub time_unit_trusted: bool,
     /// Motor layout inferred from moments vs individual rotor speeds.
     pub layout: Option<LayoutReport>,
     /// What the airborne detection kept, when it left ground samples out (`None` when

@@ -250,7 +250,8 @@ pub fn no_samples_error(
         ", so every step is a gap that leaves each sample a segment of its own, too short to \
          differentiate ({rows})"
     );
-    if let Some(text) = time_unit_suspect(s.median_time_step, s.span, s.rows_read, &consequence) {
+    let suspect = time_unit_suspect(s.median_time_step, s.span, s.rows_read, &consequence);
+    if let Some(text) = suspect.filter(|_| !s.time_unit_trusted) {
         return IoError::new(file, Location::File, time_label, ErrorKind::Mapping(text));
     }
     let order = opts.derive.sg_order;
@@ -334,9 +335,22 @@ pub struct UnitStats {
     time_steps: Median,
     /// Times of the first and the last row read, s.
     times: Option<(f64, f64)>,
+    /// The log's time unit was declared (a mapping's `[time] unit`).
+    time_unit_declared: bool,
+    /// Every row read had t equal to its row number 0, 1, 2, … (a test-point sweep's
+    /// numbering); `true` before the first row.
+    not_numbered: bool,
 }
 
 impl UnitStats {
+    /// The statistics of a log whose time unit a mapping declared (`declared`) or not.
+    pub fn new(time_unit_declared: bool) -> Self {
+        Self {
+            time_unit_declared,
+            ..Self::default()
+        }
+    }
+
     /// Adds one sample: force (N), mass (kg), rates (rad/s), rotor speeds (rad/s).
     pub fn push(&mut self, force: [f64; 3], mass: f64, rates: [f64; 3], omega: &[f64]) {
         self.samples += 1;
@@ -357,8 +371,12 @@ impl UnitStats {
     /// Adds the time of a row read, s (rows in reading order).
     pub fn time(&mut self, t: f64) {
         match &mut self.times {
-            None => self.times = Some((t, t)),
+            None => {
+                self.times = Some((t, t));
+                self.not_numbered = t != 0.0;
+            }
             Some((_, last)) => {
+                self.not_numbered |= t != *last + 1.0;
                 if t > *last {
                     self.time_steps.push(t - *last);
                 }
@@ -376,6 +394,12 @@ impl UnitStats {
     /// Time from the first row read to the last, s (0 with fewer than two).
     pub fn span(&self) -> f64 {
         self.times.map_or(0.0, |(first, last)| last - first)
+    }
+
+    /// Whether the time's unit is above the ms/µs suspicion of [`time_unit_suspect`]: a
+    /// mapping declared it, or t numbers the rows read 0, 1, 2, … (a test-point sweep).
+    pub fn time_unit_trusted(&self) -> bool {
+        self.time_unit_declared || !self.not_numbered
     }
 
     /// The blade-tip check of the rotor speeds, for `rotors` rotors of radius `radius`
@@ -451,12 +475,14 @@ impl UnitStats {
             ));
         }
         let steps = self.time_steps.count() + 1;
-        out.extend(time_unit_suspect(
-            self.median_time_step(),
-            self.span(),
-            steps,
-            " (a test-point sweep whose t only numbers its points may ignore this)",
-        ));
+        if !self.time_unit_trusted() {
+            out.extend(time_unit_suspect(
+                self.median_time_step(),
+                self.span(),
+                steps,
+                "",
+            ));
+        }
         out
     }
 }
@@ -512,6 +538,37 @@ mod tests {
         assert_eq!(time_unit_suspect(None, 0.0, 1, ""), None);
         let khz = time_unit_suspect(Some(1.0), 600_000.0, 600_001, "").unwrap();
         assert!(khz.contains("milliseconds"), "{khz}");
+    }
+
+    /// t numbering the rows 0, 1, 2, … (a test-point sweep) is trusted however many rows;
+    /// the same steps from another start, one step other than 1, or a first t other than
+    /// 0 are not (a 1 kHz clock in whole ms looks like that); a declared unit always is.
+    #[test]
+    fn numbered_rows_and_declared_units_are_trusted() {
+        let clock = |declared: bool, times: &mut dyn Iterator<Item = f64>| {
+            let mut s = UnitStats::new(declared);
+            for t in times {
+                s.time(t);
+                s.push([0.0, 0.0, -11.77], 1.2, [0.0; 3], &[2000.0; 4]);
+            }
+            s
+        };
+        let numbered = clock(false, &mut (0..100_000).map(f64::from));
+        assert!(numbered.time_unit_trusted());
+        assert!(numbered.warnings().is_empty(), "{:?}", numbered.warnings());
+        for times in [
+            &mut (7..100_007).map(f64::from) as &mut dyn Iterator<Item = f64>,
+            &mut (0..100_000).map(|k| f64::from(k + i32::from(k > 50_000))),
+        ] {
+            let ms = clock(false, times);
+            assert!(!ms.time_unit_trusted());
+            assert!(
+                ms.warnings()[0].contains("milliseconds"),
+                "{:?}",
+                ms.warnings()
+            );
+        }
+        assert!(clock(true, &mut (7..100_007).map(f64::from)).time_unit_trusted());
     }
 
     /// The shipped quad's hover (2168 rad/s, R = 0.0635 m: Mach 0.40, C_T 0.010) passes;

@@ -86,6 +86,7 @@ impl LogReader {
             ..Summary::default()
         };
         let rotors = facts.rotors;
+        let time_unit_declared = mapping.get(Signal::Time).is_some_and(|m| m.unit.is_some());
         let air = Detector::new(&facts, opts.airborne_only);
         let mut chunk = SampleChunk::with_capacity(rotors, CHUNK_SAMPLES, plan.has_omega_dot);
         prepare_optional(&mut chunk, &convert.layout);
@@ -106,7 +107,7 @@ impl LogReader {
             tally: Tally {
                 summary,
                 layout: LayoutAccumulator::new(rotors, plan.has_omega_dot),
-                unit_stats: UnitStats::default(),
+                unit_stats: UnitStats::new(time_unit_declared),
             },
             diff: Differentiator::default(),
             air,
@@ -207,6 +208,7 @@ impl LogReader {
         t.summary.dropouts = self.source.dropouts().to_vec();
         t.summary.median_time_step = t.unit_stats.median_time_step();
         t.summary.span = t.unit_stats.span();
+        t.summary.time_unit_trusted = t.unit_stats.time_unit_trusted();
         let v = &self.vehicle;
         match t
             .unit_stats
@@ -256,6 +258,7 @@ impl LogReader {
                         if summary.samples == 0 {
                             summary.median_time_step = self.tally.unit_stats.median_time_step();
                             summary.span = self.tally.unit_stats.span();
+                            summary.time_unit_trusted = self.tally.unit_stats.time_unit_trusted();
                             return Err(validate::no_samples_error(
                                 summary,
                                 &self.opts,
