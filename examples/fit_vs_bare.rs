@@ -22,10 +22,11 @@
 //! The argument is the row count. The 1 M-row quad× sweep is simulated once with
 //! `target/release/mrsysid simulate --preset quad_x --mode sweep --points 1000000 --seed 9`
 //! into `$MRSYSID_BENCH_DIR` (default: the system temp dir) and kept there for later
-//! runs; a 10 M-row log is that sweep written ten times, each copy shifted in time past
-//! the one before (time strictly increasing), because simulating 10 M sweep points takes
-//! minutes. The second log of the two-log runs is the first shifted in time once more
-//! (same size, different bytes). Nothing is written into the repository.
+//! runs; a 10 M-row log is that sweep written ten times, t numbering the rows 0, 1, 2, …
+//! throughout as a sweep's t does, because simulating 10 M sweep points takes minutes.
+//! The second log of the two-log runs is the same with each copy's rows rotated by one
+//! (same size, different bytes); a flight's is the flight shifted in time past its end.
+//! Nothing is written into the repository.
 //!
 //! Every configuration runs `$MRSYSID_BENCH_REPEAT` times (default 3; with a before
 //! binary the two alternate) after a warm-up read of the files (page cache warm for all),
@@ -85,9 +86,9 @@ fn main() {
         }
         let copies = rows / SWEEP_ROWS;
         let log = dir.join(format!("mrsysid-fit-{rows}.csv"));
-        let second = dir.join(format!("mrsysid-fit-{rows}-b.csv"));
-        shifted_copies(&sweep, &log, copies, 0);
-        shifted_copies(&sweep, &second, copies, copies);
+        let second = dir.join(format!("mrsysid-fit-{rows}-rotated.csv"));
+        numbered_copies(&sweep, &log, copies, 0);
+        numbered_copies(&sweep, &second, copies, 1);
         (log, second)
     };
     let mb = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len()) / 1_000_000;
@@ -291,6 +292,34 @@ fn simulate(bin: &Path, out: &Path) {
     assert!(status.success(), "mrsysid simulate failed");
 }
 
+/// Writes `copies` copies of the sweep `src` to `out` (unless it exists), each with its
+/// rows rotated by `rotate` (so that logs of other rotations differ), t numbering the
+/// rows written 0, 1, 2, … as a sweep's t does (a sweep's t from another start would
+/// be read as a clock in ms).
+fn numbered_copies(src: &Path, out: &Path, copies: u64, rotate: usize) {
+    if out.exists() {
+        return;
+    }
+    // Streamed, never held: the peak RSS `wait4` reports for a child includes this
+    // process's at the spawn, so a log held here would count in every fit's.
+    let rows = || {
+        lines(src)
+            .skip(1)
+            .map(|l| l.split_once(',').expect("time field").1.to_string())
+    };
+    let tmp = out.with_extension("partial");
+    let mut w = BufWriter::new(File::create(&tmp).expect("create log"));
+    writeln!(w, "{}", lines(src).next().expect("header")).expect("write");
+    let mut t = 0u64;
+    for _ in 0..copies {
+        for row in rows().skip(rotate).chain(rows().take(rotate)) {
+            writeln!(w, "{t},{row}").expect("write");
+            t += 1;
+        }
+    }
+    synced_rename(w, &tmp, out);
+}
+
 /// Writes `copies` copies of the CSV `src` to `out` (unless it exists), copy k's time
 /// shifted by (`first` + k) × (time span of `src` + its first step).
 fn shifted_copies(src: &Path, out: &Path, copies: u64, first: u64) {
@@ -319,12 +348,17 @@ fn shifted_copies(src: &Path, out: &Path, copies: u64, first: u64) {
             }
         }
     }
-    // On disk before any timing: otherwise the kernel writes the new gigabytes back
-    // during the timed runs, on the same two cores.
+    synced_rename(w, &tmp, out);
+}
+
+/// Flushes `w` (writing `tmp`) to disk and renames `tmp` to `out`: on disk before any
+/// timing, otherwise the kernel writes the new gigabytes back during the timed runs, on
+/// the same two cores.
+fn synced_rename(w: BufWriter<File>, tmp: &Path, out: &Path) {
     let file = w.into_inner().expect("write log");
     file.sync_all().expect("sync log");
     drop(file);
-    std::fs::rename(&tmp, out).expect("rename log");
+    std::fs::rename(tmp, out).expect("rename log");
 }
 
 fn lines(path: &Path) -> impl Iterator<Item = String> {
