@@ -1,5 +1,5 @@
-//! What a DataFlash log says about the vehicle: its parameters (`PARM`) and the first
-//! text message (`MSG`, the firmware name), read without a mapping (`mrsysid vehicle
+//! What a DataFlash log says about the vehicle: its parameters (`PARM`) and its firmware
+//! name (the first `MSG` text naming an ArduPilot firmware), read without a mapping (`mrsysid vehicle
 //! --from-log`).
 
 use std::collections::BTreeMap;
@@ -15,8 +15,9 @@ pub struct LogParameters {
     /// Each parameter's first value in the log (ArduPilot logs them all at the start;
     /// later `PARM` messages are changes in flight).
     pub parameters: BTreeMap<String, f64>,
-    /// The first `MSG` text (ArduPilot writes its firmware name and version there, e.g.
-    /// `ArduCopter V4.5.7 (…)`).
+    /// The first `MSG` text that names the firmware, e.g. `ArduCopter V4.5.7 (…)`
+    /// (ArduPilot writes it when the log starts; a log started at arming may open with
+    /// other texts, `Arming motors`, and may lack it).
     pub firmware: Option<String>,
 }
 
@@ -45,11 +46,50 @@ pub fn read_parameters(path: &Path) -> Result<LogParameters, IoError> {
             }
             "MSG" if out.firmware.is_none() => {
                 if let Some((_, m)) = f.field("Message") {
-                    out.firmware = Some(text(&r.body[m.offset..m.offset + m.kind.size()]));
+                    let message = text(&r.body[m.offset..m.offset + m.kind.size()]);
+                    out.firmware = names_firmware(&message).then_some(message);
                 }
             }
             _ => {}
         }
     }
     Ok(out)
+}
+
+/// True for a `MSG` text naming an ArduPilot firmware and its version (`ArduCopter
+/// V4.4.4 (865cffa5)`, `ArduPlane V4.5.0`, `Blimp V4.5.1`), not a status text.
+fn names_firmware(message: &str) -> bool {
+    let mut words = message.split_whitespace();
+    let (Some(name), Some(version)) = (words.next(), words.next()) else {
+        return false;
+    };
+    let firmware = name.starts_with("Ardu") || ["Blimp", "AntennaTracker"].contains(&name);
+    let numbered = version
+        .strip_prefix('V')
+        .is_some_and(|v| v.starts_with(|c: char| c.is_ascii_digit()));
+    firmware && numbered
+}
+
+#[cfg(test)]
+mod tests {
+    use super::names_firmware;
+
+    #[test]
+    fn a_firmware_text_is_told_from_status_texts() {
+        for firmware in [
+            "ArduCopter V4.4.4 (865cffa5)",
+            "ArduPlane V4.5.0",
+            "Blimp V4.5.1",
+        ] {
+            assert!(names_firmware(firmware), "{firmware}");
+        }
+        for status in [
+            "Arming motors",
+            "ArduPilot Ready",
+            "EKF3 IMU0 initialised",
+            "",
+        ] {
+            assert!(!names_firmware(status), "{status}");
+        }
+    }
 }
