@@ -259,6 +259,7 @@ fn print_reader_notes(out: &FitOutcome) {
                 s.dropouts.len()
             ));
         }
+        notes.extend(s.cut_off.clone());
         notes.extend(
             s.derived
                 .iter()

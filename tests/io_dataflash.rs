@@ -284,16 +284,6 @@ fn malformed_catalogue() {
             "not-dataflash.bin: byte 0: corrupted message header: bytes 0x74 0x2C, expected 0xA3 0x95 (not an ArduPilot DataFlash log)".into(),
         ),
         (
-            "truncated",
-            b[..b.len() - 5].to_vec(),
-            format!("truncated.bin: byte {}: truncated TST (type 20) message: 24 bytes long, 19 left in the file", b.len() - msg),
-        ),
-        (
-            "short-header",
-            b[..third + 2].to_vec(),
-            format!("short-header.bin: byte {third}: truncated message header: 2 bytes left at the end of the file"),
-        ),
-        (
             "bad-head",
             { let mut c = b.to_vec(); c[third + 1] = 0x00; c },
             format!("bad-head.bin: byte {third}: corrupted message header: bytes 0xA3 0x00, expected 0xA3 0x95"),
@@ -319,8 +309,39 @@ fn malformed_catalogue() {
         assert!(got.starts_with(&want), "{name}:\n got  {got}\n want {want}");
     }
     let path = write("small.bin", b);
-    let (c, _) = read_all(&path, &small_mapping()).unwrap();
-    assert_eq!(c.len(), 50);
+    let (c, summary) = read_all(&path, &small_mapping()).unwrap();
+    assert_eq!((c.len(), summary.cut_off), (50, None));
+    // A file the end cuts inside a message or its header (a log closed by a power cut)
+    // is read up to that message, and says where it was cut.
+    for (name, bytes, samples, want) in [
+        (
+            "truncated",
+            &b[..b.len() - 5],
+            49,
+            format!(
+                "a TST (type 20) message at byte {} (19 of its 24 bytes)",
+                b.len() - msg
+            ),
+        ),
+        (
+            "short-header",
+            &b[..head + 10 * msg + 2],
+            10,
+            format!(
+                "a message header at byte {} (2 of its 3 bytes)",
+                head + 10 * msg
+            ),
+        ),
+    ] {
+        let path = write(&format!("{name}.bin"), bytes);
+        let (c, summary) = read_all(&path, &small_mapping()).unwrap();
+        assert_eq!(c.len(), samples, "{name}");
+        let note = summary.cut_off.unwrap_or_default();
+        assert!(
+            note.starts_with(&format!("the file ends inside {want}: the log was cut off")),
+            "{name}: {note}"
+        );
+    }
     // A mapped field the format lacks names the message's fields.
     let text = "[mcap]\ntime_base = \"TST\"\n[signals.rates]\ntopic = \"TST\"\nfields = [\"GyrX\", \"GyrY\", \"Gyr\"]\n[signals.rotor_speeds]\ntopic = \"TST\"\nfields = [\"GyrX\", \"GyrX\", \"GyrX\", \"GyrX\"]\n[signals.velocity_body]\ntopic = \"TST\"\nfields = [\"GyrX\", \"GyrY\", \"GyrZ\"]\n[signals.specific_force]\ntopic = \"TST\"\nfields = [\"GyrX\", \"GyrY\", \"GyrZ\"]\n";
     let e = read_all(&path, &Mapping::from_toml_str(text, "m.toml").unwrap())

@@ -313,27 +313,6 @@ fn malformed_catalogue() {
         &m,
         "byte 7: ULog version 9 is not supported".into(),
     );
-    // 4. Truncated last message.
-    let b = good.bytes()[..good.bytes().len() - 7].to_vec();
-    let last = good.bytes().len() - (3 + 2 + 8 + 13 * 8);
-    push(
-        "truncated",
-        b,
-        &m,
-        format!("byte {last}: truncated 'D' message: 114 payload bytes announced, 107 left"),
-    );
-    // 5. Truncated message header at the end.
-    let mut b = good.bytes().to_vec();
-    b.extend_from_slice(&[5]);
-    push(
-        "truncated-header",
-        b,
-        &m,
-        format!(
-            "byte {}: truncated message header: 1 bytes left",
-            good.bytes().len()
-        ),
-    );
     // 6. Unknown incompatible flag bit.
     let mut b = good.bytes().to_vec();
     b[header_end + 3 + 8] = 2;
@@ -501,6 +480,50 @@ fn malformed_catalogue() {
         let want = want.replace("small:", &format!("small-{name}.ulg:"));
         assert!(got.contains(&want), "{name}:\n got: {got}\nwant: {want}");
     }
+}
+
+/// A file the end cuts inside its last message or a message header (a log closed by a
+/// power cut) is read up to that message, and its summary says where it was cut.
+#[test]
+fn a_file_cut_inside_a_message_is_read_up_to_it() {
+    let good = small_log();
+    let b = good.bytes();
+    let last = b.len() - (3 + 2 + 8 + 13 * 8);
+    let mut one_more = b.to_vec();
+    one_more.push(5);
+    for (name, bytes, samples, want) in [
+        (
+            "cut",
+            &b[..b.len() - 7],
+            SMALL_SAMPLES - 1,
+            format!("a 'D' message at byte {last} (110 of its 117 bytes)"),
+        ),
+        (
+            "cut-header",
+            &one_more[..],
+            SMALL_SAMPLES,
+            format!("a message header at byte {} (1 of its 3 bytes)", b.len()),
+        ),
+    ] {
+        let path = tmp(&format!("{name}.ulg"));
+        std::fs::write(&path, bytes).unwrap();
+        let (c, summary) = read_all(&path, &quad(0.0), &small_mapping()).unwrap();
+        assert_eq!(c.len() as u64, samples, "{name}");
+        let note = summary.cut_off.unwrap_or_default();
+        assert!(
+            note.starts_with(&format!("the file ends inside {want}: the log was cut off")),
+            "{name}: {note}"
+        );
+    }
+    let path = tmp("whole.ulg");
+    std::fs::write(&path, b).unwrap();
+    assert_eq!(
+        read_all(&path, &quad(0.0), &small_mapping())
+            .unwrap()
+            .1
+            .cut_off,
+        None
+    );
 }
 
 /// The px4 mapping with rotor speeds from actuator_outputs instance 1 (PWM 1000..2000,

@@ -20,6 +20,10 @@ pub(crate) trait RowSource {
     fn dropouts(&self) -> &[Dropout] {
         &[]
     }
+    /// The message the end of the file cut short, once reached (message-based logs).
+    fn cut_off(&self) -> Option<&str> {
+        None
+    }
     /// Bytes of the file read so far (compressed bytes of a compressed file), for
     /// progress: may run ahead of the rows returned, and may end below the file's size
     /// when parts of the file are skipped.

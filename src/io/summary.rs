@@ -70,6 +70,11 @@ pub struct Summary {
     pub time_unit_trusted: bool,
     /// Motor layout inferred from moments vs individual rotor speeds.
     pub layout: Option<LayoutReport>,
+    /// The message the end of the file cut short, where the log was read up to (a
+    /// message-based log closed by a power cut or a killed simulator; `None` when the file
+    /// ends between messages).
+    #[serde(default)]
+    pub cut_off: Option<String>,
     /// What the airborne detection kept, when it left ground samples out (`None` when
     /// every sample was kept, and without [`super::ReadOptions::airborne_only`]).
     pub airborne: Option<AirborneSpan>,
@@ -118,4 +123,14 @@ pub struct AirborneSpan {
     /// Rotor speed, rad/s, at which the rotors would carry the weight at the highest
     /// plausible thrust coefficient (φ = 1, every rotor alike).
     pub lift_speed: f64,
+}
+
+/// The note of a log whose file ends inside `what` (a message or its header, `length`
+/// bytes long) at byte `start`, `left` bytes of it in the file.
+pub(super) fn cut_off_note(start: u64, what: &str, left: u64, length: u64) -> String {
+    format!(
+        "the file ends inside a {what} at byte {start} ({left} of its {length} bytes): the \
+         log was cut off while being written (a power cut, a full card or a stopped \
+         simulator); it was read up to that message"
+    )
 }

@@ -1,13 +1,16 @@
 //! Reading a DataFlash log message by message: each message's two head bytes and type
 //! checked, its length taken from the type's `FMT` definition, its body kept; `FMT`,
 //! `FMTU`, `UNIT` and `MULT` applied on the way, so the caller sees every message with
-//! its format known. Every error names the byte offset of the message.
+//! its format known. Every error names the byte offset of the message. A message the end
+//! of the file cuts short ends the log ([`MessageReader::cut_off`]): a log closed by a
+//! power cut or a killed simulator is read up to it.
 
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::Path;
 
 use super::super::error::{ErrorKind, IoError, Location};
+use super::super::summary::cut_off_note;
 use super::format::{Format, UnitTables, parse_fmt, text};
 use super::{FMT_TYPE, HEAD, HEADER_BYTES};
 
@@ -25,6 +28,8 @@ pub(super) struct MessageReader {
     pub(super) body: Vec<u8>,
     /// Type of the message returned last.
     pub(super) kind: u8,
+    /// What the end of the file cut short, once reached.
+    cut_off: Option<String>,
 }
 
 impl MessageReader {
@@ -44,12 +49,27 @@ impl MessageReader {
             tables: UnitTables::default(),
             body: Vec::with_capacity(256),
             kind: 0,
+            cut_off: None,
         })
     }
 
     /// Bytes of the file read so far.
     pub(super) fn position(&self) -> u64 {
         self.pos
+    }
+
+    /// The message or header the end of the file cut short, with its offset, once the
+    /// reading reached it (`None` for a file that ends between messages).
+    pub(super) fn cut_off(&self) -> Option<&str> {
+        self.cut_off.as_deref()
+    }
+
+    /// Ends the log at `start`, where the file ends inside `what` (`left` bytes of
+    /// `length`): nothing more is read.
+    fn end_inside(&mut self, start: u64, what: String, length: u64) -> Option<u64> {
+        self.cut_off = Some(cut_off_note(start, &what, self.len - start, length));
+        self.pos = self.len;
+        None
     }
 
     pub(super) fn err(&self, offset: u64, text: String) -> IoError {
@@ -92,13 +112,8 @@ impl MessageReader {
             return Ok(None);
         }
         if start + HEADER_BYTES as u64 > self.len {
-            return Err(self.err(
-                start,
-                format!(
-                    "truncated message header: {} bytes left at the end of the file",
-                    self.len - start
-                ),
-            ));
+            let header = "message header".to_string();
+            return Ok(self.end_inside(start, header, HEADER_BYTES as u64));
         }
         let mut h = [0u8; HEADER_BYTES];
         self.read_into(&mut h)?;
@@ -130,14 +145,8 @@ impl MessageReader {
         };
         let size = length - HEADER_BYTES;
         if start + length as u64 > self.len {
-            return Err(self.err(
-                start,
-                format!(
-                    "truncated {} message: {length} bytes long, {} left in the file",
-                    self.name(ty),
-                    self.len - start
-                ),
-            ));
+            let what = format!("{} message", self.name(ty));
+            return Ok(self.end_inside(start, what, length as u64));
         }
         self.kind = ty;
         self.body.resize(size, 0);

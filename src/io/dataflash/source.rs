@@ -57,7 +57,8 @@ impl DataflashSource {
             by_type: vec![Vec::new(); 256],
             logged: [false; 256],
             data_messages: 0,
-            align: Aligner::new(file, slots, base, align_gap),
+            align: Aligner::new(file, slots, base, align_gap)
+                .with_quaternion(layout.start(Signal::Attitude)),
         };
         Ok((source, layout))
     }
@@ -195,6 +196,10 @@ impl TopicSource for DataflashSource {
             field(&t.key),
             ErrorKind::MissingSignal(text),
         ))
+    }
+
+    fn cut_off(&self) -> Option<&str> {
+        self.reader.cut_off()
     }
 
     fn bytes_read(&self) -> u64 {

@@ -181,7 +181,8 @@ impl McapSource {
             schemas: HashMap::new(),
             topics,
             file_topics: BTreeSet::new(),
-            align: Aligner::new(file, slots, base, max_gap),
+            align: Aligner::new(file, slots, base, max_gap)
+                .with_quaternion(layout.start(Signal::Attitude)),
             message_index: 0,
             bytes_read: 0,
         };

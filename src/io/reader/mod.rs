@@ -206,6 +206,7 @@ impl LogReader {
         t.summary.layout = t.layout.finish();
         t.summary.unit_warnings = t.unit_stats.warnings();
         t.summary.dropouts = self.source.dropouts().to_vec();
+        t.summary.cut_off = self.source.cut_off().map(str::to_string);
         t.summary.median_time_step = t.unit_stats.median_time_step();
         t.summary.span = t.unit_stats.span();
         t.summary.time_unit_trusted = t.unit_stats.time_unit_trusted();

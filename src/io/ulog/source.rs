@@ -67,7 +67,8 @@ impl UlogSource {
             data_messages: 0,
             topics,
             layout: layout.clone(),
-            align: Aligner::new(file, slots, base, align_gap),
+            align: Aligner::new(file, slots, base, align_gap)
+                .with_quaternion(layout.start(Signal::Attitude)),
             epoch: 0,
             dropouts: Vec::new(),
             first_message: true,
@@ -301,6 +302,10 @@ impl TopicSource for UlogSource {
 
     fn dropouts(&self) -> &[Dropout] {
         &self.dropouts
+    }
+
+    fn cut_off(&self) -> Option<&str> {
+        self.reader.cut_off()
     }
 
     fn bytes_read(&self) -> u64 {
