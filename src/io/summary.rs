@@ -55,7 +55,7 @@ pub struct Summary {
     pub dropouts: Vec<Dropout>,
     /// Which signals were derived and how.
     pub derived: Vec<String>,
-    /// Warnings about implausible units.
+    /// Warnings about implausible units, and about sampling too slow for the dynamics.
     pub unit_warnings: Vec<String>,
     /// Median step between the times of consecutive rows read, s (`None` with fewer
     /// than two, and for a log in memory): a sample interval, or a test point's spacing

@@ -321,6 +321,10 @@ impl std::fmt::Display for SupersonicTips {
 
 impl std::error::Error for SupersonicTips {}
 
+/// Sample rate below which a log gets a note (Hz): 25 Hz, ArduPilot's default IMU rate,
+/// resolves angular accelerations only to a few Hz, where the attitude loops act.
+pub const MIN_SAMPLE_RATE: f64 = 50.0;
+
 /// Statistics gathered while reading, to flag implausible units.
 #[derive(Debug, Clone, Default)]
 pub struct UnitStats {
@@ -447,7 +451,28 @@ impl UnitStats {
         }))
     }
 
-    /// Human-readable warnings about units that look wrong.
+    /// A note when the samples come slower than [`MIN_SAMPLE_RATE`] (not for a test-point
+    /// sweep numbered 0, 1, 2, …, whose t is no clock): what it costs and what to log
+    /// next time.
+    fn slow_sampling(&self) -> Option<String> {
+        let step = self.median_time_step()?;
+        if !self.not_numbered || step * MIN_SAMPLE_RATE <= 1.0 + 1e-6 {
+            return None;
+        }
+        Some(format!(
+            "the samples come at {} Hz (median step {} s): angular accelerations derived \
+             from the gyro, and rotor-speed dynamics, are resolved only well below {} Hz; log \
+             the time base faster next time (PX4: SDLOG_PROFILE bit 3, system identification, \
+             or bit 4, high rate; ArduPilot: LOG_BITMASK bit 18, IMU_FAST, for IMU at the \
+             loop rate instead of 25 Hz)",
+            short(1.0 / step),
+            short(step),
+            short(0.5 / step)
+        ))
+    }
+
+    /// Human-readable warnings about units that look wrong, and about sampling too slow
+    /// for the dynamics.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
         if self.samples == 0 {
@@ -475,14 +500,10 @@ impl UnitStats {
             ));
         }
         let steps = self.time_steps.count() + 1;
-        if !self.time_unit_trusted() {
-            out.extend(time_unit_suspect(
-                self.median_time_step(),
-                self.span(),
-                steps,
-                "",
-            ));
-        }
+        let suspect = time_unit_suspect(self.median_time_step(), self.span(), steps, "")
+            .filter(|_| !self.time_unit_trusted());
+        // A clock that looks like ms is no slow clock.
+        out.extend(suspect.or_else(|| self.slow_sampling()));
         out
     }
 }
@@ -569,6 +590,19 @@ mod tests {
             );
         }
         assert!(clock(true, &mut (7..100_007).map(f64::from)).time_unit_trusted());
+        // 25 Hz from t = 3 s (ArduPilot's default IMU rate) gets the slow-sampling note
+        // naming what to log; 50 Hz does not.
+        let slow = clock(false, &mut (0..500).map(|k| 3.0 + f64::from(k) * 0.04));
+        let note = &slow.warnings()[0];
+        assert!(
+            note.starts_with("the samples come at 25 Hz") && note.contains("LOG_BITMASK bit 18"),
+            "{note}"
+        );
+        assert!(
+            clock(false, &mut (0..500).map(|k| 3.0 + f64::from(k) * 0.02))
+                .warnings()
+                .is_empty()
+        );
     }
 
     /// The shipped quad's hover (2168 rad/s, R = 0.0635 m: Mach 0.40, C_T 0.010) passes;
