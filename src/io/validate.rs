@@ -5,6 +5,7 @@
 
 use super::error::{ErrorKind, IoError, Location};
 use super::mapping::Signal;
+use super::reader::LEAVE_GROUND;
 use super::{ReadOptions, Summary};
 use crate::vehicle::STANDARD_GRAVITY;
 
@@ -224,18 +225,26 @@ pub fn no_samples_error(
     let file = s.file.as_str();
     let too_short = "segment too short to differentiate";
     if let Some(air) = s.airborne {
+        // A take-off starts at φ = LEAVE_GROUND: φ grows with the square of the speed.
+        let take_off = air.lift_speed * LEAVE_GROUND.sqrt();
+        let (peak, lift) = (air.peak_speed, air.lift_speed);
+        let why = if peak < take_off {
+            format!("below the {take_off:.0} rad/s a take-off needs")
+        } else {
+            format!("but above the {take_off:.0} rad/s a take-off needs for less than a second")
+        };
         return IoError::new(
             file,
             Location::File,
             None,
             ErrorKind::TooShort(format!(
                 "no sample left: {} of the {} rows read are on the ground: the rotors reach \
-                 {:.0} rad/s at most (RMS over the rotors), below the {:.0} rad/s at which \
-                 they would carry the vehicle's weight at a thrust coefficient of 0.03, or \
-                 not for a second (docs/data-contract.md, \"Airborne segments\"); check the \
-                 vehicle file's mass and rotor_radius and the rotor-speed unit, or keep \
+                 {peak:.0} rad/s at most (RMS over the rotors), {why} (1.25^0.5 times the \
+                 {lift:.0} rad/s at which they would carry the vehicle's weight at a thrust \
+                 coefficient of 0.03; docs/data-contract.md, \"Airborne segments\"); check \
+                 the vehicle file's mass and rotor_radius and the rotor-speed unit, or keep \
                  every row with --keep-ground",
-                air.ground_samples, s.rows_read, air.peak_speed, air.lift_speed
+                air.ground_samples, s.rows_read
             )),
         );
     }
@@ -559,6 +568,31 @@ mod tests {
         assert_eq!(time_unit_suspect(None, 0.0, 1, ""), None);
         let khz = time_unit_suspect(Some(1.0), 600_000.0, 600_001, "").unwrap();
         assert!(khz.contains("milliseconds"), "{khz}");
+    }
+
+    /// A log all on the ground says whether its rotors never reached the take-off speed
+    /// (√1.25 × the lift speed) or reached it only briefly, never "below" a speed they
+    /// passed (a PX4 SITL log reaching 347 rad/s was told it stayed below 344).
+    #[test]
+    fn a_log_on_the_ground_says_why_against_the_take_off_speed() {
+        let text = |peak: f64| {
+            let summary = Summary {
+                file: "g.ulg".into(),
+                rows_read: 10,
+                airborne: Some(crate::io::AirborneSpan {
+                    ground_samples: 10,
+                    peak_speed: peak,
+                    lift_speed: 344.0,
+                    ..Default::default()
+                }),
+                ..Default::default()
+            };
+            no_samples_error(&summary, &ReadOptions::default(), None).to_string()
+        };
+        let below = text(347.0);
+        assert!(below.contains("reach 347 rad/s at most (RMS over the rotors), below the 385 rad/s a take-off needs (1.25^0.5 times the 344 rad/s"), "{below}");
+        let brief = text(400.0);
+        assert!(brief.contains("reach 400 rad/s at most (RMS over the rotors), but above the 385 rad/s a take-off needs for less than a second"), "{brief}");
     }
 
     /// t numbering the rows 0, 1, 2, … (a test-point sweep) is trusted however many rows;

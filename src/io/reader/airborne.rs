@@ -28,7 +28,7 @@ pub(super) const MAX_THRUST_COEFFICIENT: f64 = 0.03;
 pub(super) const ENTER_GROUND: f64 = 1.0;
 
 /// Ceiling φ above which a run of ground samples ends (hysteresis).
-pub(super) const LEAVE_GROUND: f64 = 1.25;
+pub(crate) const LEAVE_GROUND: f64 = 1.25;
 
 /// Shortest run, s, that switches between ground and air.
 pub(super) const MIN_RUN_SECONDS: f64 = 1.0;

@@ -11,6 +11,7 @@ mod plan;
 mod segment;
 
 use airborne::Detector;
+pub(crate) use airborne::LEAVE_GROUND;
 use convert::Converter;
 use emit::Differentiator;
 use plan::{Plan, VehicleFacts};
