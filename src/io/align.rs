@@ -21,7 +21,7 @@ use super::mapping::Mapping;
 use super::row_source::RowSource;
 use super::summary::Dropout;
 use super::units::{Dimension, unit_for};
-use super::validate::QUATERNION_NORM_TOLERANCE;
+use super::validate::{MIN_SAMPLE_RATE, QUATERNION_NORM_TOLERANCE};
 
 /// A source of topic messages aligned by an [`Aligner`] (MCAP, ULog): a [`RowSource`]
 /// whose rows are the aligned samples.
@@ -86,6 +86,10 @@ impl<S: TopicSource> RowSource for S {
 
     fn cut_off(&self) -> Option<&str> {
         TopicSource::cut_off(self)
+    }
+
+    fn slow_rotor_speeds(&mut self) -> Option<String> {
+        self.aligner().slow_rotor_speeds()
     }
 
     fn bytes_read(&self) -> u64 {
@@ -217,6 +221,18 @@ struct Queue {
     /// Where among `slots` (and a message's values) the attitude quaternion's w, x, y, z
     /// are, when this topic carries it ([`Aligner::with_quaternion`]).
     quaternion: Option<[usize; 4]>,
+    /// Messages pushed, and the times of the first and the last (finite), s: the
+    /// topic's message rate.
+    pushed: u64,
+    times: Option<(f64, f64)>,
+}
+
+impl Queue {
+    /// Mean message rate, Hz (`None` with fewer than two messages apart in time).
+    fn rate(&self) -> Option<f64> {
+        let (first, last) = self.times?;
+        (last > first && self.pushed > 1).then(|| (self.pushed - 1) as f64 / (last - first))
+    }
 }
 
 /// Aligns the topics' messages on the time-base topic; see the module docs.
@@ -229,6 +245,8 @@ pub struct Aligner {
     gap: f64,
     /// Latest finite message time pushed, s (−∞ before any).
     latest: f64,
+    /// The topic of the rotor speeds ([`Aligner::with_rotor_speeds`]).
+    rotor_topic: Option<usize>,
     last_base_epoch: Option<u32>,
     segment_break: bool,
     eof: bool,
@@ -248,11 +266,14 @@ impl Aligner {
                     slots,
                     messages: VecDeque::new(),
                     quaternion: None,
+                    pushed: 0,
+                    times: None,
                 })
                 .collect(),
             base,
             gap,
             latest: f64::NEG_INFINITY,
+            rotor_topic: None,
             last_base_epoch: None,
             segment_break: false,
             eof: false,
@@ -275,6 +296,35 @@ impl Aligner {
         self
     }
 
+    /// Marks the topic that fills slot `first` (`None`: none), the first rotor speed, as
+    /// the rotor speeds' ([`Aligner::slow_rotor_speeds`]).
+    pub fn with_rotor_speeds(mut self, first: Option<usize>) -> Self {
+        self.rotor_topic =
+            first.and_then(|first| self.queues.iter().position(|q| q.slots.contains(&first)));
+        self
+    }
+
+    /// A note when the rotor speeds come from a topic other than the time base, slower
+    /// than [`MIN_SAMPLE_RATE`] and than half the base's rate (PX4 logs `esc_status` at
+    /// 4 Hz by default): interpolated onto the base, their fast changes are lost; it
+    /// says what to log next time. Rates are mean message rates over the messages read.
+    pub fn slow_rotor_speeds(&self) -> Option<String> {
+        let topic = self.rotor_topic.filter(|&t| t != self.base)?;
+        let (rate, base) = (self.queues[topic].rate()?, self.queues[self.base].rate()?);
+        if rate >= MIN_SAMPLE_RATE || 2.0 * rate > base {
+            return None;
+        }
+        Some(format!(
+            "rotor speeds come from {} at {rate:.1} Hz, interpolated onto the time base at \
+             {base:.0} Hz: their changes faster than about {:.1} Hz are lost; log them faster \
+             next time (PX4: SDLOG_PROFILE bit 4, high rate, logs esc_status at 200 Hz \
+             instead of 4 Hz; ArduPilot: ESC telemetry with SERVO_BLH_TRATE >= 50 Hz or \
+             bidirectional DShot, SERVO_BLH_BDMASK; RCOU is logged at 10 Hz)",
+            self.queues[topic].key,
+            rate / 2.0
+        ))
+    }
+
     /// Largest time step interpolated over, s.
     pub fn gap(&self) -> f64 {
         self.gap
@@ -289,6 +339,12 @@ impl Aligner {
     pub fn push(&mut self, topic: usize, message: Message) {
         if message.t.is_finite() {
             self.latest = self.latest.max(message.t);
+            let queue = &mut self.queues[topic];
+            queue.pushed += 1;
+            queue.times = Some(match queue.times {
+                None => (message.t, message.t),
+                Some((first, last)) => (first.min(message.t), last.max(message.t)),
+            });
         }
         self.queues[topic].messages.push_back(message);
     }
@@ -430,6 +486,32 @@ mod tests {
     /// Base at 0.1 s steps, a second topic at 0.25 s steps with value 10 t: exact where
     /// the times meet, linear in between (10 t_b to rounding, 1e-12), refused across a
     /// dropout (epoch 0 → 1).
+    /// Rotor speeds at 4 Hz (PX4's default esc_status) against a 250 Hz base get the
+    /// note naming the topic, both rates and what to log; at 100 Hz, or on the base
+    /// itself, none.
+    #[test]
+    fn slow_rotor_speeds_are_noted_against_the_base_rate() {
+        let note = |rotor_hz: f64, rotor_slot: usize| {
+            let topics = vec![("base".into(), vec![0]), ("esc_status".into(), vec![1])];
+            let mut a = Aligner::new("f", topics, 0, 0.3).with_rotor_speeds(Some(rotor_slot));
+            for k in 0..=500 {
+                a.push(0, message(k as f64 / 250.0, 0.0, 0));
+            }
+            for k in 0..=(2.0 * rotor_hz) as usize {
+                a.push(1, message(k as f64 / rotor_hz, 0.0, 0));
+            }
+            a.slow_rotor_speeds()
+        };
+        let slow = note(4.0, 1).expect("4 Hz is noted");
+        assert!(
+            slow.starts_with("rotor speeds come from esc_status at 4.0 Hz, interpolated onto the time base at 250 Hz: their changes faster than about 2.0 Hz are lost")
+                && slow.contains("SDLOG_PROFILE bit 4"),
+            "{slow}"
+        );
+        assert_eq!(note(100.0, 1), None);
+        assert_eq!(note(4.0, 0), None, "on the base");
+    }
+
     /// A yaw of 40° between two attitude messages (a 400 °/s turn logged at 10 Hz): the
     /// base sample a quarter of the way is the attitude at 10° ± 0.1° (nlerp against
     /// slerp) with a unit norm, where the component-wise interpolation has norm 0.989

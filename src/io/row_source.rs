@@ -24,6 +24,11 @@ pub(crate) trait RowSource {
     fn cut_off(&self) -> Option<&str> {
         None
     }
+    /// A note when the rotor speeds come from a topic much slower than the time base
+    /// (message-based logs), at the end of the log.
+    fn slow_rotor_speeds(&mut self) -> Option<String> {
+        None
+    }
     /// Bytes of the file read so far (compressed bytes of a compressed file), for
     /// progress: may run ahead of the rows returned, and may end below the file's size
     /// when parts of the file are skipped.

@@ -58,7 +58,8 @@ impl DataflashSource {
             logged: [false; 256],
             data_messages: 0,
             align: Aligner::new(file, slots, base, align_gap)
-                .with_quaternion(layout.start(Signal::Attitude)),
+                .with_quaternion(layout.start(Signal::Attitude))
+                .with_rotor_speeds(layout.start(Signal::RotorSpeeds)),
         };
         Ok((source, layout))
     }

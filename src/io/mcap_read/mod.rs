@@ -182,7 +182,8 @@ impl McapSource {
             topics,
             file_topics: BTreeSet::new(),
             align: Aligner::new(file, slots, base, max_gap)
-                .with_quaternion(layout.start(Signal::Attitude)),
+                .with_quaternion(layout.start(Signal::Attitude))
+                .with_rotor_speeds(layout.start(Signal::RotorSpeeds)),
             message_index: 0,
             bytes_read: 0,
         };

@@ -208,6 +208,9 @@ impl LogReader {
         t.summary.unit_warnings = t.unit_stats.warnings();
         t.summary.dropouts = self.source.dropouts().to_vec();
         t.summary.cut_off = self.source.cut_off().map(str::to_string);
+        t.summary
+            .unit_warnings
+            .extend(self.source.slow_rotor_speeds());
         t.summary.median_time_step = t.unit_stats.median_time_step();
         t.summary.span = t.unit_stats.span();
         t.summary.time_unit_trusted = t.unit_stats.time_unit_trusted();

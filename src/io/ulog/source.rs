@@ -68,7 +68,8 @@ impl UlogSource {
             topics,
             layout: layout.clone(),
             align: Aligner::new(file, slots, base, align_gap)
-                .with_quaternion(layout.start(Signal::Attitude)),
+                .with_quaternion(layout.start(Signal::Attitude))
+                .with_rotor_speeds(layout.start(Signal::RotorSpeeds)),
             epoch: 0,
             dropouts: Vec::new(),
             first_message: true,
