@@ -125,12 +125,26 @@ pub struct AirborneSpan {
     pub lift_speed: f64,
 }
 
-/// The note of a log whose file ends inside `what` (a message or its header, `length`
-/// bytes long) at byte `start`, `left` bytes of it in the file.
-pub(super) fn cut_off_note(start: u64, what: &str, left: u64, length: u64) -> String {
-    format!(
-        "the file ends inside a {what} at byte {start} ({left} of its {length} bytes): the \
-         log was cut off while being written (a power cut, a full card or a stopped \
-         simulator); it was read up to that message"
-    )
+/// Where the end of a message-based log's file cut a message short: the log ends
+/// there, and its summary says so ([`Summary::cut_off`]).
+#[derive(Debug, Clone, Default)]
+pub(super) struct CutOff(Option<String>);
+
+impl CutOff {
+    /// The note, once the reading reached the cut (`None` for a file that ends between
+    /// messages).
+    pub(super) fn note(&self) -> Option<&str> {
+        self.0.as_deref()
+    }
+
+    /// Records that the file, `len` bytes long, ends inside `what` (a message or its
+    /// header, `length` bytes long) starting at byte `start`.
+    pub(super) fn record(&mut self, start: u64, what: &str, len: u64, length: u64) {
+        let left = len - start;
+        self.0 = Some(format!(
+            "the file ends inside a {what} at byte {start} ({left} of its {length} bytes): \
+             the log was cut off while being written (a power cut, a full card or a stopped \
+             simulator); it was read up to that message"
+        ));
+    }
 }

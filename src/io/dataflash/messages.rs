@@ -2,7 +2,7 @@
 //! checked, its length taken from the type's `FMT` definition, its body kept; `FMT`,
 //! `FMTU`, `UNIT` and `MULT` applied on the way, so the caller sees every message with
 //! its format known. Every error names the byte offset of the message. A message the end
-//! of the file cuts short ends the log ([`MessageReader::cut_off`]): a log closed by a
+//! of the file cuts short ends the log ([`super::super::summary::CutOff`]): a log closed by a
 //! power cut or a killed simulator is read up to it.
 
 use std::fs::File;
@@ -10,7 +10,7 @@ use std::io::{BufReader, Read};
 use std::path::Path;
 
 use super::super::error::{ErrorKind, IoError, Location};
-use super::super::summary::cut_off_note;
+use super::super::summary::CutOff;
 use super::format::{Format, UnitTables, parse_fmt, text};
 use super::{FMT_TYPE, HEAD, HEADER_BYTES};
 
@@ -29,7 +29,7 @@ pub(super) struct MessageReader {
     /// Type of the message returned last.
     pub(super) kind: u8,
     /// What the end of the file cut short, once reached.
-    cut_off: Option<String>,
+    pub(super) cut_off: CutOff,
 }
 
 impl MessageReader {
@@ -49,7 +49,7 @@ impl MessageReader {
             tables: UnitTables::default(),
             body: Vec::with_capacity(256),
             kind: 0,
-            cut_off: None,
+            cut_off: CutOff::default(),
         })
     }
 
@@ -58,16 +58,10 @@ impl MessageReader {
         self.pos
     }
 
-    /// The message or header the end of the file cut short, with its offset, once the
-    /// reading reached it (`None` for a file that ends between messages).
-    pub(super) fn cut_off(&self) -> Option<&str> {
-        self.cut_off.as_deref()
-    }
-
-    /// Ends the log at `start`, where the file ends inside `what` (`left` bytes of
-    /// `length`): nothing more is read.
-    fn end_inside(&mut self, start: u64, what: String, length: u64) -> Option<u64> {
-        self.cut_off = Some(cut_off_note(start, &what, self.len - start, length));
+    /// Ends the log at `start`, where the file ends inside `what` (`length` bytes long):
+    /// nothing more is read.
+    fn end_inside(&mut self, start: u64, what: &str, length: u64) -> Option<u64> {
+        self.cut_off.record(start, what, self.len, length);
         self.pos = self.len;
         None
     }
@@ -112,8 +106,7 @@ impl MessageReader {
             return Ok(None);
         }
         if start + HEADER_BYTES as u64 > self.len {
-            let header = "message header".to_string();
-            return Ok(self.end_inside(start, header, HEADER_BYTES as u64));
+            return Ok(self.end_inside(start, "message header", HEADER_BYTES as u64));
         }
         let mut h = [0u8; HEADER_BYTES];
         self.read_into(&mut h)?;
@@ -146,7 +139,7 @@ impl MessageReader {
         let size = length - HEADER_BYTES;
         if start + length as u64 > self.len {
             let what = format!("{} message", self.name(ty));
-            return Ok(self.end_inside(start, what, length as u64));
+            return Ok(self.end_inside(start, &what, length as u64));
         }
         self.kind = ty;
         self.body.resize(size, 0);

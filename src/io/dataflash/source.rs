@@ -200,7 +200,7 @@ impl TopicSource for DataflashSource {
     }
 
     fn cut_off(&self) -> Option<&str> {
-        self.reader.cut_off()
+        self.reader.cut_off.note()
     }
 
     fn bytes_read(&self) -> u64 {

@@ -1,14 +1,14 @@
 //! Reading a ULog file message by message: the header checked, each message's size and
 //! type read and its payload kept, appended data (flag bits) followed, and every error
 //! naming the byte offset of the message. A message the end of the file cuts short ends
-//! the log ([`MessageReader::cut_off`]): a log closed by a power cut is read up to it.
+//! the log ([`super::super::summary::CutOff`]): a log closed by a power cut is read up to it.
 
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::Path;
 
 use super::super::error::{ErrorKind, IoError, Location};
-use super::super::summary::cut_off_note;
+use super::super::summary::CutOff;
 use super::{FLAG_BITS_BYTES, HEADER_BYTES, MAGIC, MESSAGE_HEADER_BYTES};
 
 /// Name of a message type for errors: `'D'`, or its byte value.
@@ -35,7 +35,7 @@ pub(super) struct MessageReader {
     /// Type of the message returned last.
     pub(super) kind: u8,
     /// What the end of the file cut short, once reached.
-    cut_off: Option<String>,
+    pub(super) cut_off: CutOff,
 }
 
 impl MessageReader {
@@ -54,7 +54,7 @@ impl MessageReader {
             appended: Vec::new(),
             buf: Vec::with_capacity(1 << 16),
             kind: 0,
-            cut_off: None,
+            cut_off: CutOff::default(),
         };
         if len < HEADER_BYTES {
             return Err(r.err(
@@ -85,16 +85,10 @@ impl MessageReader {
         self.pos
     }
 
-    /// The message or header the end of the file cut short, with its offset, once the
-    /// reading reached it (`None` for a file that ends between messages).
-    pub(super) fn cut_off(&self) -> Option<&str> {
-        self.cut_off.as_deref()
-    }
-
     /// Ends the log at `start`, where the file ends inside `what` (`length` bytes long):
     /// nothing more is read.
-    fn end_inside(&mut self, start: u64, what: String, length: u64) -> Option<u64> {
-        self.cut_off = Some(cut_off_note(start, &what, self.len - start, length));
+    fn end_inside(&mut self, start: u64, what: &str, length: u64) -> Option<u64> {
+        self.cut_off.record(start, what, self.len, length);
         self.pos = self.len;
         None
     }
@@ -149,8 +143,7 @@ impl MessageReader {
                 return Ok(None);
             }
             if start + MESSAGE_HEADER_BYTES > self.len {
-                let header = "message header".to_string();
-                return Ok(self.end_inside(start, header, MESSAGE_HEADER_BYTES));
+                return Ok(self.end_inside(start, "message header", MESSAGE_HEADER_BYTES));
             }
             if let Some(&a) = self.appended.first()
                 && a < start + MESSAGE_HEADER_BYTES
@@ -172,7 +165,7 @@ impl MessageReader {
             }
             if end > self.len {
                 let what = format!("{} message", type_name(h[2]));
-                return Ok(self.end_inside(start, what, end - start));
+                return Ok(self.end_inside(start, &what, end - start));
             }
             self.kind = h[2];
             self.buf.resize(size as usize, 0);

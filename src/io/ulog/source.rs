@@ -306,7 +306,7 @@ impl TopicSource for UlogSource {
     }
 
     fn cut_off(&self) -> Option<&str> {
-        self.reader.cut_off()
+        self.reader.cut_off.note()
     }
 
     fn bytes_read(&self) -> u64 {
