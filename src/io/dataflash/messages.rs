@@ -2,8 +2,8 @@
 //! checked, its length taken from the type's `FMT` definition, its body kept; `FMT`,
 //! `FMTU`, `UNIT` and `MULT` applied on the way, so the caller sees every message with
 //! its format known. Every error names the byte offset of the message. A message the end
-//! of the file cuts short ends the log ([`super::super::summary::CutOff`]): a log closed by a
-//! power cut or a killed simulator is read up to it.
+//! of the file cuts short ends the log ([`super::super::summary::CutOff`]): a log closed
+//! by a power cut or a killed simulator is read up to it.
 
 use std::fs::File;
 use std::io::{BufReader, Read};

@@ -1,7 +1,8 @@
 //! Reading a ULog file message by message: the header checked, each message's size and
 //! type read and its payload kept, appended data (flag bits) followed, and every error
 //! naming the byte offset of the message. A message the end of the file cuts short ends
-//! the log ([`super::super::summary::CutOff`]): a log closed by a power cut is read up to it.
+//! the log ([`super::super::summary::CutOff`]): a log closed by a power cut is read up to
+//! it.
 
 use std::fs::File;
 use std::io::{BufReader, Read};
