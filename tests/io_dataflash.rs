@@ -199,7 +199,7 @@ fn missing_esc_telemetry_says_what_to_change_on_the_vehicle() {
         "SERVO_BLH_TRATE",
         "LOG_BITMASK",
         "RCOU",
-        "INS_LOG_BAT_MASK",
+        "IMU_FAST",
         "SYSID",
     ] {
         assert!(e.contains(words), "{words}: {e}");

@@ -19,8 +19,9 @@ pub const MISSING_ROTOR_SPEEDS: &str = "ArduPilot logs ESC messages only with ES
      bidirectional DShot (SERVO_BLH_BDMASK, MOT_PWM_TYPE = DShot) or BLHeli telemetry \
      (SERVO_BLH_AUTO = 1, SERVO_BLH_TRATE >= 50 Hz) or DroneCAN ESCs, and LOG_BITMASK with \
      IMU and RCOUT set; without telemetry, map RCOU with an `actuator` table (commanded \
-     speeds, see `mrsysid vehicle --from-log`). For fast IMU data set INS_LOG_BAT_MASK and \
-     INS_LOG_BAT_OPT; the SYSID flight mode (SID_AXIS, SID_MAGNITUDE, SID_F_START_HZ, \
+     speeds, see `mrsysid vehicle --from-log`). For IMU at the loop rate instead of 25 Hz \
+     set LOG_BITMASK bit 18 (IMU_FAST; the batch sampler's ISBD messages, \
+     INS_LOG_BAT_MASK, are not read); the SYSID flight mode (SID_AXIS, SID_MAGNITUDE, SID_F_START_HZ, \
      SID_F_STOP_HZ) flies chirps made for identification";
 
 /// Appended to a sample a slow message could not be aligned to: what to change on the
