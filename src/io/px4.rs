@@ -43,11 +43,19 @@ pub struct Px4Rotor {
 /// Why PX4's control-allocation parameters give no rotor table; names the parameter.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Px4ParameterError {
-    /// No `CA_ROTOR_COUNT` (a log of PX4 before v1.13).
+    /// No `CA_ROTOR_COUNT` (a log of PX4 before v1.13, whose mixer files are not logged:
+    /// only the airframe's `SYS_AUTOSTART`).
     #[error(
-        "parameter CA_ROTOR_COUNT is not in the log (PX4 before v1.13 has no control-allocation parameters)"
+        "parameter CA_ROTOR_COUNT is not in the log (PX4 before v1.13 has no control-allocation \
+         parameters: its geometry is a mixer file the log does not hold, only the airframe, \
+         SYS_AUTOSTART = {}); write the [[rotors]] table by hand from the airframe's mixer, \
+         in PX4's motor order (docs/vehicle-file.md)",
+        autostart.map_or("absent".to_string(), |a| a.to_string())
     )]
-    NoRotorCount,
+    NoRotorCount {
+        /// The airframe's `SYS_AUTOSTART`, when logged.
+        autostart: Option<f64>,
+    },
     /// A rotor count that is not a whole number 1..=[`MAX_ROTORS`](super::MAX_ROTORS).
     #[error(
         "CA_ROTOR_COUNT = {count}: expected a whole number 1..={}",
@@ -81,7 +89,9 @@ pub fn rotors_from_parameters(
 ) -> Result<Vec<Px4Rotor>, Px4ParameterError> {
     let count = *params
         .get("CA_ROTOR_COUNT")
-        .ok_or(Px4ParameterError::NoRotorCount)?;
+        .ok_or_else(|| Px4ParameterError::NoRotorCount {
+            autostart: params.get("SYS_AUTOSTART").copied(),
+        })?;
     if !(1.0..=super::MAX_ROTORS as f64).contains(&count) || count.fract() != 0.0 {
         return Err(Px4ParameterError::RotorCount { count });
     }
@@ -239,6 +249,13 @@ mod tests {
 
     #[test]
     fn missing_and_asymmetric() {
+        // A log of PX4 before v1.13: the airframe named, and what to do.
+        let old = BTreeMap::from([("SYS_AUTOSTART".to_string(), 4001.0)]);
+        let e = rotors_from_parameters(&old).unwrap_err().to_string();
+        assert!(
+            e.contains("SYS_AUTOSTART = 4001") && e.contains("docs/vehicle-file.md"),
+            "{e}"
+        );
         let mut p = params([(0.1, 0.1, 0.05); 4]);
         p.remove("CA_ROTOR2_KM");
         assert_eq!(
