@@ -513,6 +513,31 @@ fn a_long_numbered_sweep_fits_and_a_declared_time_unit_is_believed() {
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
+/// The shipped sweep without its `omega_dot` columns: its points, 1 s apart, cannot be
+/// differentiated; the refusal (exit 1) says so and names what the log must carry.
+#[test]
+fn a_sweep_without_rotor_accelerations_is_told_to_carry_them() {
+    let d = dir("sweep-no-omega-dot");
+    let sweep = std::fs::read_to_string(root().join("data/quad_x_sweep.csv")).unwrap();
+    let cut: String = sweep
+        .lines()
+        .map(|l| l.split(',').take(17).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    assert!(cut.starts_with("t,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz\n"));
+    let log = write(&d.join("points.csv"), cut);
+    let out = mrsysid(&["fit", s(&log), "--vehicle", VEHICLE, "--quiet"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    for needle in [
+        "points.csv",
+        "rows are 1 s apart",
+        "must carry",
+        "rotor accelerations",
+    ] {
+        assert!(err.contains(needle), "missing {needle}: {err}");
+    }
+}
+
 // 7. Logs too short to fit.
 
 /// A header and one data row, a 3 s log, and one row whose moments must be derived: exit

@@ -264,6 +264,25 @@ pub fn no_samples_error(
         return IoError::new(file, Location::File, time_label, ErrorKind::Mapping(text));
     }
     let order = opts.derive.sg_order;
+    // Points farther apart than max_gap throughout (a test-point sweep): nothing can be
+    // differentiated, what is derived must be logged.
+    let differentiated: Vec<&str> = s
+        .derived
+        .iter()
+        .filter(|d| d.contains("derivative"))
+        .filter_map(|d| d.split(" from ").next())
+        .collect();
+    let points = s
+        .median_time_step
+        .filter(|&step| step > opts.max_gap && !differentiated.is_empty())
+        .map_or(String::new(), |step| {
+            format!(
+                "; its rows are {} s apart (median), as a test-point sweep's points are: such a \
+                 log must carry what would be differentiated ({})",
+                short(step),
+                differentiated.join(", ")
+            )
+        });
     IoError::new(
         file,
         Location::File,
@@ -271,7 +290,7 @@ pub fn no_samples_error(
         ErrorKind::TooShort(format!(
             "no sample left: {rows}, every segment being too short to differentiate (with \
              sg_order {order} a segment needs at least {} samples, and a time step longer than \
-             max_gap = {} s starts a new segment)",
+             max_gap = {} s starts a new segment){points}",
             order + 1,
             opts.max_gap
         )),
