@@ -135,17 +135,12 @@ pub enum LogFormat {
     Dataflash,
 }
 
-/// The format of the file by its magic bytes (MCAP, ULog, DataFlash `FMT` head), else
-/// CSV; a `.ulg` file is ULog and a `.bin` file DataFlash whatever its first bytes (so a
-/// corrupt one is told so).
+/// The format of the file by its magic bytes (MCAP, ULog, DataFlash `FMT` head), whatever
+/// its name (a ULog named `.bin` is a ULog); bytes of no format are CSV, except in a
+/// `.ulg`, `.bin` or `.mcap` file, which is that format (so a corrupt one is told so). A
+/// gzip-compressed `.ulg.gz`, `.bin.gz` or `.mcap.gz` is an error saying to decompress it
+/// (only CSV is read compressed).
 pub fn log_format(path: &Path) -> std::io::Result<LogFormat> {
-    let ext = |e: &str| path.extension().is_some_and(|x| x.eq_ignore_ascii_case(e));
-    if ext("ulg") {
-        return Ok(LogFormat::Ulog);
-    }
-    if ext("bin") {
-        return Ok(LogFormat::Dataflash);
-    }
     let mut magic = [0u8; 8];
     let mut f = std::fs::File::open(path)?;
     let mut n = 0;
@@ -156,13 +151,69 @@ pub fn log_format(path: &Path) -> std::io::Result<LogFormat> {
         }
         n += k;
     }
+    let named = |e: &str| path.extension().is_some_and(|x| x.eq_ignore_ascii_case(e));
+    let inner = |e: &str| {
+        named("gz")
+            && Path::new(path.file_stem().unwrap_or_default())
+                .extension()
+                .is_some_and(|x| x.eq_ignore_ascii_case(e))
+    };
     Ok(if n >= 5 && &magic[..5] == b"\x89MCAP" {
         LogFormat::Mcap
     } else if n >= 7 && magic[..7] == ulog::MAGIC {
         LogFormat::Ulog
     } else if n >= 3 && magic[..2] == dataflash::HEAD && magic[2] == dataflash::FMT_TYPE {
         LogFormat::Dataflash
+    } else if n >= 2
+        && magic[..2] == [0x1f, 0x8b]
+        && ["ulg", "bin", "mcap"].iter().any(|e| inner(e))
+    {
+        return Err(std::io::Error::other(
+            "a gzip-compressed ULog, DataFlash or MCAP log: decompress it first (gunzip); \
+             only CSV logs are read compressed",
+        ));
+    } else if named("ulg") {
+        LogFormat::Ulog
+    } else if named("bin") {
+        LogFormat::Dataflash
+    } else if named("mcap") {
+        LogFormat::Mcap
     } else {
         LogFormat::Csv
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A log is told by its first bytes whatever its name; a name decides only for bytes
+    /// of no format; a compressed binary log is refused with what to do.
+    #[test]
+    fn a_log_s_format_is_its_content_then_its_name() {
+        let dir = std::env::temp_dir().join(format!("mrsysid-log-format-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let format = |name: &str, bytes: &[u8]| {
+            let path = dir.join(name);
+            std::fs::write(&path, bytes).unwrap();
+            log_format(&path)
+        };
+        let ulog = [&ulog::MAGIC[..], &[0; 9]].concat();
+        let dataflash = [0xA3, 0x95, 0x80, 0x80, 0x59];
+        assert_eq!(format("ulog.bin", &ulog).unwrap(), LogFormat::Ulog);
+        assert_eq!(format("df.csv", &dataflash).unwrap(), LogFormat::Dataflash);
+        assert_eq!(
+            format("mcap.ulg", b"\x89MCAP0\r\n").unwrap(),
+            LogFormat::Mcap
+        );
+        assert_eq!(format("text.bin", b"t,u\n").unwrap(), LogFormat::Dataflash);
+        assert_eq!(format("text.csv", b"t,u\n").unwrap(), LogFormat::Csv);
+        assert_eq!(
+            format("log.csv.gz", &[0x1f, 0x8b, 8, 0]).unwrap(),
+            LogFormat::Csv
+        );
+        let e = format("log.ulg.gz", &[0x1f, 0x8b, 8, 0]).unwrap_err();
+        assert!(e.to_string().contains("decompress it first"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
