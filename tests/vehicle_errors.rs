@@ -399,3 +399,35 @@ fn too_many_rotors() {
         &["66 rotors: at most 64 are supported"],
     );
 }
+
+/// Lengths in mm where m are expected: the rotor positions (arms 225 m) or the rotor
+/// radius (63.5 m) a thousand times too large, named against each other; the largest
+/// ratio accepted is 50 either way (real multirotors: 1 to 5).
+#[test]
+fn a_length_in_millimetres_is_named() {
+    let mm: Vec<(f64, f64, i64)> = QUAD_X
+        .iter()
+        .map(|&(x, y, s)| (x * 1e3, y * 1e3, s))
+        .collect();
+    assert_error(
+        &format!("{HEADER}{}", rotors(&mm)),
+        &[
+            "arm length 224.860 m (from the rotor positions) is 3541 times the rotor_radius 0.0635 m",
+            "in mm?",
+        ],
+    );
+    let radius = HEADER.replace("rotor_radius = 0.0635", "rotor_radius = 63.5");
+    assert_error(
+        &format!("{radius}{}", rotors(&QUAD_X)),
+        &[
+            "rotor_radius 63.5 m is 282 times the arm length 0.225 m",
+            "in mm?",
+        ],
+    );
+    let ok = HEADER.replace("rotor_radius = 0.0635", "rotor_radius = 0.0045");
+    Vehicle::from_toml_str(
+        &format!("{ok}{}", rotors(&QUAD_X)),
+        VehicleSource::File("ok.toml".into()),
+    )
+    .expect("a ratio of 50 is accepted");
+}

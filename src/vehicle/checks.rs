@@ -42,6 +42,31 @@ pub(super) fn check_properties(p: &MassAndRotorProperties) -> Result<(), Vehicle
     check_inertia(&p.inertia)
 }
 
+/// Largest ratio of arm length to rotor radius, either way round, of a vehicle file:
+/// multirotors have ℓ/R between about 1 and 5; a thousand is one length in mm.
+const MAX_LENGTH_RATIO: f64 = 50.0;
+
+/// A vehicle file's arm length `arm` ℓ (mean hub radius, m) and rotor radius `radius` R
+/// (m) within [`MAX_LENGTH_RATIO`] of each other either way: beyond it one of them was written in mm
+/// (a fit then runs on a vehicle a thousand times too large or small).
+pub(super) fn check_length_units(arm: f64, radius: f64) -> Result<(), VehicleErrorKind> {
+    let ratio = arm.max(radius) / arm.min(radius);
+    if ratio <= MAX_LENGTH_RATIO {
+        return Ok(());
+    }
+    let arm_text = format!("arm length {arm:.3} m (from the rotor positions)");
+    let radius_text = format!("rotor_radius {radius} m");
+    let (long, short) = if arm > radius {
+        (arm_text, radius_text)
+    } else {
+        (radius_text, arm_text)
+    };
+    Err(VehicleErrorKind::Layout(format!(
+        "the {long} is {ratio:.0} times the {short} (multirotors have an arm length of \
+         about 1 to 5 rotor radii): one of them in mm? Lengths are in m"
+    )))
+}
+
 /// Symmetric positive definite, by Sylvester's criterion on the leading minors.
 fn check_inertia(i: &[[f64; 3]; 3]) -> Result<(), VehicleErrorKind> {
     if i.iter().flatten().any(|v| !v.is_finite()) {

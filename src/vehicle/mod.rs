@@ -28,7 +28,10 @@ use std::f64::consts::PI;
 use std::fmt;
 use std::path::Path;
 
-use checks::{assumption2_breaches, check_layout, check_positive, check_properties, classify};
+use checks::{
+    assumption2_breaches, check_layout, check_length_units, check_positive, check_properties,
+    classify,
+};
 use file::{file_rotors, one_line};
 
 pub use error::{Assumption2Breach, VehicleError, VehicleErrorKind, VehicleSource};
@@ -216,7 +219,9 @@ impl Vehicle {
         let tol = file
             .geometry_tolerance
             .unwrap_or(DEFAULT_GEOMETRY_TOLERANCE);
-        Self::build(file.name, props, rotors, tol).map_err(err)
+        let vehicle = Self::build(file.name, props, rotors, tol).map_err(err)?;
+        check_length_units(vehicle.arm_length, vehicle.props.rotor_radius).map_err(err)?;
+        Ok(vehicle)
     }
 
     /// Builds a preset layout with arm length `arm_length` (m); rotor 1 spins `first_spin`.
