@@ -431,3 +431,35 @@ fn a_length_in_millimetres_is_named() {
     )
     .expect("a ratio of 50 is accepted");
 }
+
+/// The inertia may be given as its diagonal (principal body axes); any other shape is
+/// refused naming both forms, at its line.
+#[test]
+fn inertia_as_a_diagonal_is_read_and_other_shapes_say_both_forms() {
+    let diagonal = HEADER.replace(
+        "inertia = [[0.011, 0, 0], [0, 0.012, 0], [0, 0, 0.021]]",
+        "inertia = [0.011, 0.012, 0.021]",
+    );
+    let read = |header: &str| {
+        Vehicle::from_toml_str(
+            &format!("{header}{}", rotors(&QUAD_X)),
+            VehicleSource::File("v.toml".into()),
+        )
+    };
+    assert_eq!(
+        read(&diagonal).unwrap().props.inertia,
+        read(HEADER).unwrap().props.inertia
+    );
+    let two = HEADER.replace(
+        "inertia = [[0.011, 0, 0], [0, 0.012, 0], [0, 0, 0.021]]",
+        "inertia = [0.011, 0.012]",
+    );
+    assert_error(
+        &format!("{two}{}", rotors(&QUAD_X)),
+        &[
+            "line 4",
+            "expected a 3x3 matrix [[Ixx, Ixy, Ixz]",
+            "or its diagonal [Ixx, Iyy, Izz]",
+        ],
+    );
+}

@@ -15,7 +15,9 @@ pub struct VehicleDefinition {
     pub name: String,
     /// Mass, kg.
     pub mass: f64,
-    /// Inertia about the CG, body axes, kg m².
+    /// Inertia about the CG, body axes, kg m² (a file may give its diagonal
+    /// `[Ixx, Iyy, Izz]` alone, for principal body axes).
+    #[serde(deserialize_with = "matrix_or_diagonal")]
     pub inertia: [[f64; 3]; 3],
     /// Air density, kg/m³ (default 1.225).
     #[serde(default = "default_air_density")]
@@ -42,6 +44,24 @@ pub struct VehicleDefinition {
     /// Tolerance of the Assumption 2 checks (relative to ℓ, or rad).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub geometry_tolerance: Option<f64>,
+}
+
+/// An inertia written as a 3×3 matrix or as its diagonal `[Ixx, Iyy, Izz]` (kg m²).
+fn matrix_or_diagonal<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[[f64; 3]; 3], D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Inertia {
+        Matrix([[f64; 3]; 3]),
+        Diagonal([f64; 3]),
+    }
+    match Inertia::deserialize(d) {
+        Ok(Inertia::Matrix(m)) => Ok(m),
+        Ok(Inertia::Diagonal([xx, yy, zz])) => Ok([[xx, 0.0, 0.0], [0.0, yy, 0.0], [0.0, 0.0, zz]]),
+        Err(_) => Err(serde::de::Error::custom(
+            "expected a 3x3 matrix [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]] or its \
+             diagonal [Ixx, Iyy, Izz], kg m^2",
+        )),
+    }
 }
 
 /// One `[[rotors]]` entry of a vehicle file.
