@@ -267,8 +267,8 @@ fn print_reader_notes(out: &FitOutcome) {
                 .cloned(),
         );
         notes.extend(s.unit_warnings.iter().cloned());
-        if !notes.is_empty() {
-            print_err(&format!("note: {}: {}", s.file, notes.join("; ")));
+        for note in notes {
+            print_err(&format!("note: {}: {note}", s.file));
         }
     }
 }
