@@ -249,7 +249,13 @@ fn print_reader_notes(out: &FitOutcome) {
         if spikes > 0 {
             notes.push(format!("{spikes} samples look like spikes {:?}", s.spikes));
         }
-        if s.segments > 1 {
+        if s.segments > 1 && s.segments as u64 == s.samples {
+            notes.push(format!(
+                "{} samples, each a point of its own (every time step over max_gap): a \
+                 test-point sweep, not a time series",
+                s.samples
+            ));
+        } else if s.segments > 1 {
             notes.push(format!("{} segments (gaps split the log)", s.segments));
         }
         if !s.dropouts.is_empty() {

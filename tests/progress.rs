@@ -87,7 +87,9 @@ fn fit_ends_with_one_line_on_stderr_when_it_is_not_a_terminal() {
         .expect("a line");
     assert_eq!(
         notes,
-        ["note: quad_x_sweep.csv: 2000 segments (gaps split the log)"]
+        [
+            "note: quad_x_sweep.csv: 2000 samples, each a point of its own (every time step over max_gap): a test-point sweep, not a time series"
+        ]
     );
     let expected = format!("fit: 1 log, {mb:.1} MB read, 4000 samples passed, ");
     assert!(last.starts_with(&expected), "{stderr}");
