@@ -228,6 +228,23 @@ pub enum RequestError {
         /// Cut-off given, Hz.
         hz: f64,
     },
+    /// A declared loads low-pass cut-off above half a log's sample rate: such a filter
+    /// does nothing there, so the declaration cannot be what the log's processing did.
+    #[error(
+        "the loads' low-pass cut-off {hz} Hz is above half the sample rate of {log} ({} Hz, \
+         a sample every {step} s): a filter there does nothing; declare the cut-off of the \
+         filter the loads went through (below {} Hz), or `--loads-low-pass estimate`",
+        0.5 / step,
+        0.5 / step
+    )]
+    LoadsLowPassAboveNyquist {
+        /// Cut-off declared, Hz.
+        hz: f64,
+        /// The log's file name.
+        log: String,
+        /// Its median sample step, s.
+        step: f64,
+    },
     /// The model structure was built for another vehicle.
     #[error(
         "the model structure is for {structure} rotors but the vehicle has {vehicle}: build it from this vehicle"

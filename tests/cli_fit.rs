@@ -1097,6 +1097,40 @@ fn a_loads_cut_off_must_be_a_positive_frequency() {
     assert!(e.to_string().contains("loads.low_pass_hz"), "{e}");
 }
 
+/// A declared loads cut-off above half the log's sample rate (the shipped flight logs at
+/// 100 Hz) is refused, exit 2, naming the log, its half rate and what to do: such a
+/// filter does nothing, so it cannot be what the loads went through. 50 Hz is accepted.
+#[test]
+fn a_loads_cut_off_above_half_the_sample_rate_is_refused() {
+    let fit = |hz: &str| {
+        mrsysid(&[
+            "fit",
+            "data/quad_x_flight_quadratic_drag.csv",
+            "--vehicle",
+            "data/vehicles/quad_x.toml",
+            "--loads-low-pass",
+            hz,
+            "--no-diagnose",
+            "--quiet",
+        ])
+    };
+    let out = fit("60");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    for needle in [
+        "cut-off 60 Hz is above half the sample rate of quad_x_flight_quadratic_drag.csv (50 Hz",
+        "--loads-low-pass estimate",
+    ] {
+        assert!(err.contains(needle), "missing {needle}: {err}");
+    }
+    let out = fit("50");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// `mrsysid accumulate` writes each log's first pass to a statistics file, and
 /// `fit --from-stats` fits them without reading a log: the same estimates, σ (white),
 /// fit, cross-validation and validation figures as the direct fit of the logs (whose

@@ -35,6 +35,31 @@ pub(super) fn time_unit_error(req: &FitRequest, per_log: &[LogStats]) -> Result<
     Ok(())
 }
 
+/// The error of the first log file (fit or validation, `per_log` in job order) whose
+/// median sample step puts half its sample rate below the request's declared loads
+/// low-pass cut-off: that filter would do nothing there. (An estimated cut-off is
+/// chosen below a quarter of the rate, [`crate::loads_scan`].)
+pub(super) fn low_pass_error(req: &FitRequest, per_log: &[LogStats]) -> Result<(), Error> {
+    let Some(hz) = req.effective_loads_low_pass() else {
+        return Ok(());
+    };
+    let steps = per_log.iter().filter_map(|l| {
+        let s = &l.summary;
+        s.median_time_step.map(|step| (s, step))
+    });
+    for (s, step) in steps {
+        if hz * step > 0.5 {
+            return Err(RequestError::LoadsLowPassAboveNyquist {
+                hz,
+                log: s.file.clone(),
+                step,
+            }
+            .into());
+        }
+    }
+    Ok(())
+}
+
 /// The error of a single fit log (`log`, read as `req.logs[0]`) too short for its blocks
 /// (`short`); a clock in ms or µs was refused before ([`time_unit_error`]).
 pub(super) fn too_short(req: &FitRequest, log: &LogStats, short: TooShort) -> Error {

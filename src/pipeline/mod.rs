@@ -63,7 +63,7 @@ pub use request::{FitRequest, Holdout};
 
 use first_pass::{Keep, LogCounts, LogStats, read_log};
 use folds::{arrange, merge};
-use log_checks::{time_unit_error, too_short};
+use log_checks::{low_pass_error, time_unit_error, too_short};
 use outcome::validation_source;
 use request::check;
 use second_pass::second_pass;
@@ -140,6 +140,7 @@ fn first_fit(
     mut per_log: Vec<LogStats>,
 ) -> Result<(FitOutcome, FirstPass), Error> {
     time_unit_error(req, &per_log)?;
+    low_pass_error(req, &per_log)?;
     let n_fit = req.logs.len();
     let mut validation_stats = Accumulator::new(&req.structure);
     let mut screening = Thinned::new(SCREENING_SAMPLES);
