@@ -231,9 +231,9 @@ pub enum RequestError {
     /// A declared loads low-pass cut-off above half a log's sample rate: such a filter
     /// does nothing there, so the declaration cannot be what the log's processing did.
     #[error(
-        "the loads' low-pass cut-off {hz} Hz is above half the sample rate of {log} ({} Hz, \
-         a sample every {step} s): a filter there does nothing; declare the cut-off of the \
-         filter the loads went through (below {} Hz), or `--loads-low-pass estimate`",
+        "the loads' low-pass cut-off {hz} Hz is above half the sample rate of {log} ({:.1} \
+         Hz, a sample every {step} s): a filter there does nothing; declare the cut-off of \
+         the filter the loads went through (below {:.1} Hz), or `--loads-low-pass estimate`",
         0.5 / step,
         0.5 / step
     )]

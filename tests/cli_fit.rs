@@ -1118,7 +1118,7 @@ fn a_loads_cut_off_above_half_the_sample_rate_is_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     for needle in [
-        "cut-off 60 Hz is above half the sample rate of quad_x_flight_quadratic_drag.csv (50 Hz",
+        "cut-off 60 Hz is above half the sample rate of quad_x_flight_quadratic_drag.csv (50.0 Hz",
         "--loads-low-pass estimate",
     ] {
         assert!(err.contains(needle), "missing {needle}: {err}");

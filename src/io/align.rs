@@ -483,9 +483,6 @@ mod tests {
         }
     }
 
-    /// Base at 0.1 s steps, a second topic at 0.25 s steps with value 10 t: exact where
-    /// the times meet, linear in between (10 t_b to rounding, 1e-12), refused across a
-    /// dropout (epoch 0 → 1).
     /// Rotor speeds at 4 Hz (PX4's default esc_status) against a 250 Hz base get the
     /// note naming the topic, both rates and what to log; at 100 Hz, or on the base
     /// itself, none.
@@ -576,6 +573,9 @@ mod tests {
         );
     }
 
+    /// Base at 0.1 s steps, a second topic at 0.25 s steps with value 10 t: exact where
+    /// the times meet, linear in between (10 t_b to rounding, 1e-12), refused across a
+    /// dropout (epoch 0 → 1).
     #[test]
     fn interpolates_between_bracketing_messages_of_one_epoch() {
         let mut a = Aligner::new(

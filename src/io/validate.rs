@@ -369,8 +369,8 @@ pub struct UnitStats {
     times: Option<(f64, f64)>,
     /// The log's time unit was declared (a mapping's `[time] unit`).
     time_unit_declared: bool,
-    /// Every row read had t equal to its row number 0, 1, 2, … (a test-point sweep's
-    /// numbering); `true` before the first row.
+    /// Some row read had a t other than its row number 0, 1, 2, … (so t is no test-point
+    /// sweep's numbering); `false` before the first row.
     not_numbered: bool,
 }
 
@@ -484,6 +484,8 @@ impl UnitStats {
     /// next time.
     fn slow_sampling(&self) -> Option<String> {
         let step = self.median_time_step()?;
+        // The tolerance keeps a clock at exactly the limit (steps of 0.02 s written in
+        // decimal, whose differences round a few ulps either way) below it.
         if !self.not_numbered || step * MIN_SAMPLE_RATE <= 1.0 + 1e-6 {
             return None;
         }

@@ -11,7 +11,8 @@ use crate::source::LogSource;
 /// The error of the first log file (fit or validation, `per_log` in job order) whose time
 /// looks logged in ms or µs: a median step over 1 s or a span over a day
 /// ([`io::time_unit_suspect`]), unless its unit is trusted (declared in a mapping, or t
-/// numbering the rows of a test-point sweep). Its blocks or its dynamics would be cut on a wrong clock.
+/// numbering the rows of a test-point sweep). Its blocks or its dynamics would be cut on
+/// a wrong clock.
 pub(super) fn time_unit_error(req: &FitRequest, per_log: &[LogStats]) -> Result<(), Error> {
     let sources = req.logs.iter().chain(&req.validate);
     for (source, log) in sources.zip(per_log) {

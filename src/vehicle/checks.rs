@@ -47,8 +47,8 @@ pub(super) fn check_properties(p: &MassAndRotorProperties) -> Result<(), Vehicle
 const MAX_LENGTH_RATIO: f64 = 50.0;
 
 /// A vehicle file's arm length `arm` ℓ (mean hub radius, m) and rotor radius `radius` R
-/// (m) within [`MAX_LENGTH_RATIO`] of each other either way: beyond it one of them was written in mm
-/// (a fit then runs on a vehicle a thousand times too large or small).
+/// (m) within [`MAX_LENGTH_RATIO`] of each other either way: beyond it one of them was
+/// written in mm (a fit then runs on a vehicle a thousand times too large or small).
 pub(super) fn check_length_units(arm: f64, radius: f64) -> Result<(), VehicleErrorKind> {
     let ratio = arm.max(radius) / arm.min(radius);
     if ratio <= MAX_LENGTH_RATIO {

@@ -1,6 +1,6 @@
 //! What a DataFlash log says about the vehicle: its parameters (`PARM`) and its firmware
-//! name (the first `MSG` text naming an ArduPilot firmware), read without a mapping (`mrsysid vehicle
-//! --from-log`).
+//! name (the first `MSG` text naming an ArduPilot firmware), read without a mapping
+//! (`mrsysid vehicle --from-log`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
