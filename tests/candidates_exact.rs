@@ -284,6 +284,56 @@ fn second_order_inflow_columns_are_exact() {
     }
 }
 
+/// A quadrotor on a rectangle whose rotor centroid is off the CG (every layout sum Σy_i,
+/// Σx_i y_i, Σx_i(x_i² + y_i²) non-zero), with the test vehicle's properties.
+fn rectangle() -> Vehicle {
+    Vehicle::from_rotors(
+        "rectangle off the CG",
+        vehicle(Preset::QuadX).props.clone(),
+        [
+            (0.16, 0.23, 1.0),
+            (-0.11, -0.19, 1.0),
+            (0.16, -0.19, -1.0),
+            (-0.11, 0.23, -1.0),
+        ]
+        .map(|(x, y, spin)| Rotor { x, y, spin })
+        .to_vec(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn yaw_rate_edgewise_thrust_columns_are_exact() {
+    // ΔT_i = ρπR² C_T_mu2 (V_h,i² − V_h²), Eq. 22c's edgewise thrust term at each hub's
+    // own in-plane velocity (u − r y_i, v + r x_i) (Eq. 17), computed rotor by rotor
+    // and summed with each rotor's lever arm; the candidate's columns are sums over the
+    // layout. Layouts: rotors off the axes, on them, and a rectangle whose rotor centroid
+    // is off the CG (every sum Σy_i, Σx_i y_i, Σx_i(x_i² + y_i²) non-zero). A wrong lever
+    // sign or a missing r² term shows at ≥ 1e-1.
+    for v in [
+        vehicle(Preset::QuadX),
+        vehicle(Preset::HexaPlus),
+        rectangle(),
+    ] {
+        let k = v.props.air_density * std::f64::consts::PI * v.props.rotor_radius.powi(2);
+        let c = 0.4;
+        let e = check(&v, EffectKind::YawRateHubAirspeed, &[c], |s, b| {
+            let [u, w_v, _] = s.velocity;
+            let r = s.rates[2];
+            let d: Vec<f64> = v
+                .rotors()
+                .iter()
+                .map(|p| {
+                    let (ui, vi) = (u - r * p.y, w_v + r * p.x);
+                    k * c * (ui * ui + vi * vi - u * u - w_v * w_v)
+                })
+                .collect();
+            with_thrust_change(&v, b, &d)
+        });
+        assert!(e < 1e-9, "{}: {e:e}", v.name);
+    }
+}
+
 #[test]
 fn cg_offset_columns_are_first_order_exact() {
     // The truth: the same airframe with every hub at r_i − d from the CG, in the closed

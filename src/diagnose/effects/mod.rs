@@ -32,6 +32,7 @@ mod vertical_drag;
 mod vortex_ring;
 mod wake_interaction;
 mod yaw_rate_drag;
+mod yaw_rate_hub_airspeed;
 
 pub use context::{CandidateContext, hover_thrust_coefficient};
 
@@ -42,7 +43,7 @@ type Effect = fn(&CandidateContext) -> Vec<Candidate>;
 
 /// Every effect of the library, in the order its candidates are offered (the order
 /// breaks ties in the search).
-const LIBRARY: [Effect; 20] = [
+const LIBRARY: [Effect; 21] = [
     ground_effect::candidates,
     rotor_asymmetry::candidates,
     cg_offset::candidates,
@@ -54,6 +55,7 @@ const LIBRARY: [Effect; 20] = [
     rotor_speed_delay::delay,
     steady_wind::candidates,
     yaw_rate_drag::candidates,
+    yaw_rate_hub_airspeed::candidates,
     roll_pitch_rate_drag::candidates,
     decoupled_moments::candidates,
     rotor_flapping::candidates,
@@ -131,6 +133,7 @@ mod tests {
             "rotor-speed delay",
             "steady wind",
             "yaw-rate rotor drag",
+            "yaw-rate hub airspeed",
             "roll/pitch-rate rotor drag",
             "rotor flapping moment",
             "rotor rate damping",
