@@ -5,7 +5,7 @@
 
 use super::error::{ErrorKind, IoError, Location};
 use super::mapping::Signal;
-use super::reader::LEAVE_GROUND;
+use super::reader::{DIFFERENTIATED, LEAVE_GROUND};
 use super::{ReadOptions, Summary};
 use crate::vehicle::STANDARD_GRAVITY;
 
@@ -266,11 +266,13 @@ pub fn no_samples_error(
     let order = opts.derive.sg_order;
     // Points farther apart than max_gap throughout (a test-point sweep): nothing can be
     // differentiated, what is derived must be logged.
-    let differentiated: Vec<&str> = s
-        .derived
+    let differentiated: Vec<&str> = DIFFERENTIATED
         .iter()
-        .filter(|d| d.contains("derivative"))
-        .filter_map(|d| d.split(" from ").next())
+        .filter(|(what, source)| {
+            let entry = format!("{what} from {source} ");
+            s.derived.iter().any(|d| d.starts_with(&entry))
+        })
+        .map(|&(what, _)| what)
         .collect();
     let points = s
         .median_time_step

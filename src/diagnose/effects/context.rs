@@ -216,6 +216,35 @@ impl CandidateContext<'_> {
             .collect()
     }
 
+    /// Columns of a thrust change ΔT_i = ρπR² Σ_m c_m,i Π factors_m per unit of its
+    /// parameter, a polynomial in signals whose coefficients c_m,i differ by rotor
+    /// (`monomials`: factors and one coefficient per rotor), summed over the layout with
+    /// each load's lever arm ([`THRUST_LOADS`]) and labelled `<sum><what>`. A sum below
+    /// 1e-12 of the lever arms' is a symmetric layout's zero, rounded, and is dropped,
+    /// and so is a load left without terms.
+    pub(super) fn thrust_polynomial(
+        &self,
+        what: &str,
+        monomials: &[(Vec<Signal>, Vec<f64>)],
+    ) -> Vec<Column> {
+        let rotors = self.vehicle.rotors();
+        THRUST_LOADS
+            .iter()
+            .filter_map(|&(axis, lever, label)| {
+                let arms: Vec<f64> = rotors.iter().map(lever).collect();
+                let scale: f64 = arms.iter().map(|l| l.abs()).sum();
+                let terms: Vec<Term> = monomials
+                    .iter()
+                    .filter_map(|(factors, c)| {
+                        let sum: f64 = arms.iter().zip(c).map(|(l, c)| l * c).sum();
+                        (sum.abs() > 1e-12 * scale).then(|| term(self.k() * sum, factors))
+                    })
+                    .collect();
+                (!terms.is_empty()).then(|| column(axis, &format!("{label}{what}"), terms))
+            })
+            .collect()
+    }
+
     /// ∂(model load of `axis`)/∂(body velocity component `k`: u, v, w) from the base
     /// estimates, as terms (u, v, w and V_h factors differentiated; ∂V_h/∂u = u/V_h).
     pub(super) fn model_velocity_gradient(&self, axis: Axis, k: usize) -> Vec<Term> {

@@ -7,70 +7,49 @@
 //! damping with forward speed (the induced flow follows the climb speed less in forward
 //! flight).
 
-use super::context::{CandidateContext, THRUST_LOADS, column};
+use super::context::CandidateContext;
 use crate::diagnose::candidate::{Candidate, CandidateParameter, EffectKind as Kind, Role};
-use crate::model::{Signal, Term, term};
-use crate::sample::Axis;
+use crate::model::Signal;
 
 const PHYSICS: &str = "In forward flight a rotor's induced flow follows the climb speed less than in hover, so its thrust changes more with axial speed as in-plane speed grows, and in hover the inflow bends with the axial speed: the V_h w and w^2 terms of momentum-theory inflow that the first-order inflow plane of Eq. 6 drops.";
 
 /// The V_h w_i and w_i² coefficients.
 pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
     use Signal::*;
-    let k = ctx.k();
     let rotors = ctx.vehicle.rotors();
     let (xs, ys): (Vec<f64>, Vec<f64>) = rotors.iter().map(|r| (r.x, r.y)).unzip();
-    // Σ_i lever_i g_i as terms, g_i a polynomial in the hub velocity given as
-    // (factors, per-rotor coefficient) pairs.
-    let axis_terms = |monomials: &[(Vec<Signal>, Vec<f64>)]| {
-        THRUST_LOADS
-            .iter()
-            .map(|&(axis, lever, label)| {
-                let arms: Vec<f64> = rotors.iter().map(lever).collect();
-                let scale: f64 = arms.iter().map(|l| l.abs()).sum();
-                let terms: Vec<Term> = monomials
-                    .iter()
-                    .filter_map(|(factors, c)| {
-                        let sum: f64 = arms.iter().zip(c).map(|(l, c)| l * c).sum();
-                        (sum.abs() > 1e-12 * scale).then(|| term(k * sum, factors))
-                    })
-                    .collect();
-                (axis, label, terms)
-            })
-            .filter(|(_, _, t)| !t.is_empty())
-            .collect::<Vec<_>>()
-    };
     let one = vec![1.0; rotors.len()];
     let neg_x: Vec<f64> = xs.iter().map(|x| -x).collect();
     // w_i V_h = (w + p y_i − q x_i) V_h.
-    let cross = axis_terms(&[
-        (vec![W, Vh], one.clone()),
-        (vec![P, Vh], ys.clone()),
-        (vec![Q, Vh], neg_x.clone()),
-    ]);
+    let cross = ctx.thrust_polynomial(
+        "Vh*w_i",
+        &[
+            (vec![W, Vh], one.clone()),
+            (vec![P, Vh], ys.clone()),
+            (vec![Q, Vh], neg_x.clone()),
+        ],
+    );
     // w_i² = w² + 2 w p y_i − 2 w q x_i + p² y_i² − 2 p q x_i y_i + q² x_i².
     let prod = |a: &[f64], b: &[f64], f: f64| a.iter().zip(b).map(|(a, b)| f * a * b).collect();
-    let square = axis_terms(&[
-        (vec![W, W], one.clone()),
-        (vec![W, P], prod(&one, &ys, 2.0)),
-        (vec![W, Q], prod(&one, &neg_x, 2.0)),
-        (vec![P, P], prod(&ys, &ys, 1.0)),
-        (vec![P, Q], prod(&ys, &neg_x, 2.0)),
-        (vec![Q, Q], prod(&xs, &xs, 1.0)),
-    ]);
-    let columns = |list: Vec<(Axis, &str, Vec<Term>)>, what: &str| {
-        list.into_iter()
-            .map(|(axis, label, terms)| column(axis, &format!("{label}{what}"), terms))
-            .collect()
-    };
+    let square = ctx.thrust_polynomial(
+        "w_i^2",
+        &[
+            (vec![W, W], one.clone()),
+            (vec![W, P], prod(&one, &ys, 2.0)),
+            (vec![W, Q], prod(&one, &neg_x, 2.0)),
+            (vec![P, P], prod(&ys, &ys, 1.0)),
+            (vec![P, Q], prod(&ys, &neg_x, 2.0)),
+            (vec![Q, Q], prod(&xs, &xs, 1.0)),
+        ],
+    );
     vec![Candidate::new(
         Kind::SecondOrderInflow,
         Role::Completion,
         "second-order inflow",
         PHYSICS,
         vec![
-            CandidateParameter::new("C_T_muvw", "-", columns(cross, "Vh*w_i")),
-            CandidateParameter::new("C_T_w2", "-", columns(square, "w_i^2")),
+            CandidateParameter::new("C_T_muvw", "-", cross),
+            CandidateParameter::new("C_T_w2", "-", square),
         ],
     )]
 }

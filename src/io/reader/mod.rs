@@ -14,6 +14,7 @@ use airborne::Detector;
 pub(crate) use airborne::LEAVE_GROUND;
 use convert::Converter;
 use emit::Differentiator;
+pub(crate) use plan::DIFFERENTIATED;
 use plan::{Plan, VehicleFacts};
 use segment::Window;
 

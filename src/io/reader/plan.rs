@@ -7,6 +7,13 @@ use super::super::slots::SlotLayout;
 use super::super::validate::SPIKE_HALF_WINDOW;
 use crate::vehicle::Vehicle;
 
+/// What the reader differentiates when the log lacks it, and from what: the start of
+/// its [`super::super::Summary::derived`] entry ("<what> from <source> by …").
+pub(crate) const DIFFERENTIATED: [(&str, &str); 2] = [
+    ("angular acceleration", "body rates"),
+    ("rotor accelerations", "rotor speeds"),
+];
+
 /// Vehicle facts used by derivations and checks.
 #[derive(Debug, Clone)]
 pub(super) struct VehicleFacts {
@@ -77,11 +84,13 @@ impl Plan {
             "Savitzky-Golay derivative (window {}, order {})",
             derive.sg_window, derive.sg_order
         );
-        if self.diff_rates {
-            derived.push(format!("angular acceleration from body rates by {sg}"));
-        }
-        if self.diff_omega {
-            derived.push(format!("rotor accelerations from rotor speeds by {sg}"));
+        for ((what, source), done) in DIFFERENTIATED
+            .iter()
+            .zip([self.diff_rates, self.diff_omega])
+        {
+            if done {
+                derived.push(format!("{what} from {source} by {sg}"));
+            }
         }
         if !layout.has(Signal::Moment) {
             derived.push("moment M = I w_dot + w x I w".into());
