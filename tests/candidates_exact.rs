@@ -90,10 +90,17 @@ fn check_candidate(
         .iter()
         .map(|p| lumped.value(&p.name).unwrap())
         .collect();
+    // The lever arm's force with the same exact values, column by column.
+    let force_theta: Vec<f64> = base
+        .columns
+        .iter()
+        .map(|c| theta[c.param.index()])
+        .collect();
     let ctx = CandidateContext {
         vehicle: v,
         structure: &base,
         theta: &theta,
+        force_theta: &force_theta,
         has_height: true,
         has_omega_dot: true,
         has_omega_ddot: false,
@@ -474,10 +481,12 @@ fn gathered_rows_equal_the_assembled_part() {
     let v = vehicle(Preset::QuadX);
     let base = ModelStructure::eq22(&v, ModelOptions::default());
     let theta = vec![1e-6; base.params.len()];
+    let force_theta = vec![1e-6; base.columns.len()];
     let ctx = CandidateContext {
         vehicle: &v,
         structure: &base,
         theta: &theta,
+        force_theta: &force_theta,
         has_height: true,
         has_omega_dot: true,
         has_omega_ddot: false,

@@ -77,10 +77,12 @@ fn run(truth: &dyn Fn(&Sample, [f64; 6]) -> [f64; 6]) -> mrsysid::internals::dia
         acc.push(&base, c, &mut ws).unwrap();
     }
     let f = fit(&base, &acc, &FitOptions::default()).unwrap();
+    let force_theta = f.own_axis_estimates(base.columns.len());
     let ctx = CandidateContext {
         vehicle: &v,
         structure: &base,
         theta: &f.mmr.theta,
+        force_theta: &force_theta,
         has_height: false,
         has_omega_dot: true,
         has_omega_ddot: false,

@@ -31,10 +31,12 @@ pub fn diagnose_chunks(
     }
     let fit = estimate::fit(base, &acc, fit_options)?;
     let first = fit_data.first();
+    let force_theta = fit.own_axis_estimates(base.columns.len());
     let ctx = CandidateContext {
         vehicle,
         structure: base,
         theta: &fit.mmr.theta,
+        force_theta: &force_theta,
         has_height: first.is_some_and(|c| !c.is_empty() && c.height.is_some()),
         has_omega_dot: first.is_some_and(|c| c.omega_dot.is_some()),
         has_omega_ddot: first.is_some_and(|c| c.omega_ddot.is_some()),

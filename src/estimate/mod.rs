@@ -173,6 +173,21 @@ pub struct Fit {
     pub identifiability: Vec<ProblemConditioning>,
 }
 
+impl Fit {
+    /// Step 1's estimates, one per column of a structure of `columns` columns: each
+    /// column's estimate in its own axis's OLS (0 where that fit dropped it). A
+    /// parameter shared between axes has one value per axis here.
+    pub fn own_axis_estimates(&self, columns: usize) -> Vec<f64> {
+        let mut out = vec![0.0; columns];
+        for ols in self.axes.iter().map(|a| &a.ols) {
+            for (&j, &th) in ols.columns.iter().zip(&ols.theta) {
+                out[j] = th;
+            }
+        }
+        out
+    }
+}
+
 /// Runs the two-step estimation of the seed on the statistics in `acc`.
 pub fn fit(
     structure: &ModelStructure,

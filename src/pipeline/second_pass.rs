@@ -49,10 +49,12 @@ impl Extended {
         screening: &SampleChunk,
         options: &DiagnoseOptions,
     ) -> Result<Self, Error> {
+        let force_theta = fit.own_axis_estimates(req.structure.columns.len());
         let ctx = CandidateContext {
             vehicle: &req.vehicle,
             structure: &req.structure,
             theta: &fit.mmr.theta,
+            force_theta: &force_theta,
             has_height: signals.height,
             has_omega_dot: signals.omega_dot,
             has_omega_ddot: signals.omega_ddot,

@@ -11,8 +11,8 @@ const PHYSICS: &str = "In-plane forces act dz below the height Eq. 22 assumes (t
 /// ΔM_x = F̂_y dz, ΔM_y = −F̂_x dz.
 pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
     let dz = vec![
-        column(Axis::Mx, "Fy_model", ctx.model_force(Axis::Fy, 1.0)),
-        column(Axis::My, "-Fx_model", ctx.model_force(Axis::Fx, -1.0)),
+        column(Axis::Mx, "Fy_model", ctx.lever_force(Axis::Fy, 1.0)),
+        column(Axis::My, "-Fx_model", ctx.lever_force(Axis::Fx, -1.0)),
     ];
     let dz = dz.into_iter().filter(|c| !c.terms.is_empty()).collect();
     // Plausible within ±0.2 m.

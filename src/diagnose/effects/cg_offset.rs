@@ -2,7 +2,8 @@
 //! the reference point the rotor positions are given from:
 //!
 //! - the lever arms: moments about the true CG gain ΔM = F̂ × d, F̂ the base model's
-//!   force;
+//!   force with each force axis's own OLS estimates
+//!   ([`CandidateContext::lever_force`]: the joint ones are pulled by the offset's moments);
 //! - the rotors' inflow: every hub sits at r_i − d from the true CG, so its climb
 //!   velocity w + p y_i − q x_i (Eq. 18) differs from the model's by q dx − p dy, the
 //!   same for every rotor, and every load changes by (∂F̂/∂w)(q dx − p dy), ∂F̂/∂w the
@@ -25,8 +26,8 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
     let dx = with_inflow(
         ctx,
         vec![
-            column(Axis::My, "Fz_model", ctx.model_force(Axis::Fz, 1.0)),
-            column(Axis::Mz, "-Fy_model", ctx.model_force(Axis::Fy, -1.0)),
+            column(Axis::My, "Fz_model", ctx.lever_force(Axis::Fz, 1.0)),
+            column(Axis::Mz, "-Fy_model", ctx.lever_force(Axis::Fy, -1.0)),
         ],
         1.0,
         Signal::Q,
@@ -35,8 +36,8 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
     let dy = with_inflow(
         ctx,
         vec![
-            column(Axis::Mx, "-Fz_model", ctx.model_force(Axis::Fz, -1.0)),
-            column(Axis::Mz, "Fx_model", ctx.model_force(Axis::Fx, 1.0)),
+            column(Axis::Mx, "-Fz_model", ctx.lever_force(Axis::Fz, -1.0)),
+            column(Axis::Mz, "Fx_model", ctx.lever_force(Axis::Fx, 1.0)),
         ],
         -1.0,
         Signal::P,

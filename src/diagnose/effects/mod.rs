@@ -90,10 +90,12 @@ mod tests {
         };
         let base = ModelStructure::eq22(&v, options);
         let theta = vec![1e-6; base.params.len()];
+        let force_theta = vec![1e-6; base.columns.len()];
         library(&CandidateContext {
             vehicle: &v,
             structure: &base,
             theta: &theta,
+            force_theta: &force_theta,
             has_height: true,
             has_omega_dot: true,
             has_omega_ddot: true,

@@ -88,10 +88,12 @@ mod tests {
         let v = Vehicle::from_toml_file(&root.join("data/vehicles/quad_x.toml")).unwrap();
         let base = ModelStructure::eq22(&v, ModelOptions::default());
         let theta = vec![1e-6; base.params.len()];
+        let force_theta = vec![1e-6; base.columns.len()];
         let ctx = CandidateContext {
             vehicle: &v,
             structure: &base,
             theta: &theta,
+            force_theta: &force_theta,
             has_height: false,
             has_omega_dot: false,
             has_omega_ddot: false,
