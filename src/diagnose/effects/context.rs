@@ -31,7 +31,7 @@ pub struct CandidateContext<'a> {
     pub theta: &'a [f64],
     /// Each force axis's own OLS estimates (step 1 of the base fit), one per
     /// `structure.columns` (0 where that fit dropped the column; moment columns unused):
-    /// the force on a lever arm ([`CandidateContext::lever_force`]).
+    /// the force on a lever arm (`CandidateContext::lever_force`).
     pub force_theta: &'a [f64],
     /// The data log CG height (ground-effect candidate).
     pub has_height: bool,
