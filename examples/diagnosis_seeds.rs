@@ -50,7 +50,7 @@ const CASES: &[Case] = &[
     Case {
         data: Data::Sweep,
         effects: &["cg_offset=0.01,-0.008,0"],
-        expected: Some("CG offset"),
+        expected: Some("CG offset | CG offset, joint lever force"),
     },
     Case {
         data: Data::Sweep,
@@ -95,7 +95,7 @@ const CASES: &[Case] = &[
     Case {
         data: Data::Flight(60.0, true),
         effects: &["cg_offset=0.01,-0.008,0"],
-        expected: Some("CG offset"),
+        expected: Some("CG offset | CG offset, joint lever force"),
     },
     Case {
         data: Data::Flight(30.0, false),

@@ -648,7 +648,12 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
     );
     let d = &v["diagnosis"];
     let first = first_effect(d);
-    assert_eq!(first["name"], "CG offset");
+    // Either form of the offset (the lever force from F_z's own fit or the joint one).
+    assert!(
+        first["name"].as_str().unwrap().starts_with("CG offset"),
+        "{}",
+        first["name"]
+    );
     let final_estimate = |name: &str| {
         parameter_row(first, name)["final_estimate"]
             .as_f64()

@@ -161,7 +161,11 @@ fn cg_offset_is_found_and_recovered() {
         [b[0], b[1], b[2], b[3] + m[0], b[4] + m[1], b[5] + m[2]]
     });
     let first = &d.effects_added[0];
-    assert_eq!(first.name, "CG offset", "{:#?}", d.steps[0].ranking);
+    assert!(
+        first.name.starts_with("CG offset"),
+        "{:#?}",
+        d.steps[0].ranking
+    );
     let dy = first.parameters.iter().find(|p| p.name == "cg_dy").unwrap();
     assert!((dy.estimate - dxy[1]).abs() < 0.1 * dxy[1].abs(), "{dy:?}");
 }

@@ -94,7 +94,10 @@ fn weak_rotor_is_found_with_its_index_and_loss() {
     let h = estimate(e, "in_plane_scale_3");
     assert!((-0.15..0.0).contains(&h), "{h}");
     let names: Vec<&str> = d.effects_added.iter().map(|e| e.name.as_str()).collect();
-    assert!(!names.contains(&"CG offset"), "{names:?}");
+    assert!(
+        !names.iter().any(|n| n.starts_with("CG offset")),
+        "{names:?}"
+    );
     assert_nrmse_drop(&d, 3);
 }
 
@@ -102,7 +105,7 @@ fn weak_rotor_is_found_with_its_index_and_loss() {
 fn cg_offset_is_found_and_recovered_within_10_percent() {
     let d = run(&["cg_offset=0.01,-0.008,0"], 12);
     let e = first_effect(&d);
-    assert_eq!(e.name, "CG offset");
+    assert!(e.name.starts_with("CG offset"), "{}", e.name);
     let (dx, dy) = (estimate(e, "cg_dx"), estimate(e, "cg_dy"));
     assert!(
         (dx - 0.01).abs() < 0.001 && (dy + 0.008).abs() < 0.0008,

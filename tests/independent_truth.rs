@@ -392,7 +392,11 @@ fn second_airframe_surface_cg_offset_leaves_no_inflow_term() {
     let d = iris_surface(Some(h));
     println!("{:?}", d.findings);
     let s = score(&d, &clean, Some(expected_kind(&h)));
-    assert_eq!(s.naming, Naming::Added("CG offset".into()));
+    assert!(
+        matches!(&s.naming, Naming::Added(n) if n.starts_with("CG offset")),
+        "{:?}",
+        s.naming
+    );
     assert!(s.beyond_clean.is_empty(), "{:?}", s.beyond_clean);
 }
 

@@ -2,8 +2,7 @@
 //! the reference point the rotor positions are given from:
 //!
 //! - the lever arms: moments about the true CG gain ΔM = F̂ × d, F̂ the base model's
-//!   force with each force axis's own OLS estimates
-//!   ([`CandidateContext::lever_force`]: the joint ones are pulled by the offset's moments);
+//!   force (two forms: see [`candidates`]);
 //! - the rotors' inflow: every hub sits at r_i − d from the true CG, so its climb
 //!   velocity w + p y_i − q x_i (Eq. 18) differs from the model's by q dx − p dy, the
 //!   same for every rotor, and every load changes by (∂F̂/∂w)(q dx − p dy), ∂F̂/∂w the
@@ -20,14 +19,31 @@ use crate::sample::Axis;
 
 const PHYSICS: &str = "With the CG at (dx, dy) from the reference point, the thrust acts on a lever arm (M gains F x d), and each rotor climbs with the body rates about the true CG, by q dx - p dy more than about the reference point, which changes its inflow and thrust.";
 
-/// The offset's two components.
+/// The offset's two components, in two forms that differ in the force on the lever
+/// arm: each force axis's own OLS ([`CandidateContext::lever_force`]), or the joint
+/// estimates ([`CandidateContext::model_force`]). The joint fit shares the thrust
+/// coefficients between F_z and the moments, so a large offset pulls them and the
+/// lever force with them (RotorPy's hummingbird with 17 mm: Ĉ_T0 −0.0135 against
+/// 0.0139, the offset 7.6 % short); but F_z alone may split its thrust among collinear
+/// terms that extrapolate worse (a PX4 log's future M_x R² 48 against 82). The
+/// held-out data choose.
 pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
+    let own = |axis, scale| ctx.lever_force(axis, scale);
+    let joint = |axis, scale| ctx.model_force(axis, scale);
+    vec![
+        form(ctx, "CG offset", &own),
+        form(ctx, "CG offset, joint lever force", &joint),
+    ]
+}
+
+/// One form, with the lever arm's force `force(axis, scale)`.
+fn form(ctx: &CandidateContext, name: &str, force: &dyn Fn(Axis, f64) -> Vec<Term>) -> Candidate {
     // Per unit dx: ΔM_y = F̂_z, ΔM_z = −F̂_y; the climb velocity gains q.
     let dx = with_inflow(
         ctx,
         vec![
-            column(Axis::My, "Fz_model", ctx.lever_force(Axis::Fz, 1.0)),
-            column(Axis::Mz, "-Fy_model", ctx.lever_force(Axis::Fy, -1.0)),
+            column(Axis::My, "Fz_model", force(Axis::Fz, 1.0)),
+            column(Axis::Mz, "-Fy_model", force(Axis::Fy, -1.0)),
         ],
         1.0,
         Signal::Q,
@@ -36,20 +52,15 @@ pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
     let dy = with_inflow(
         ctx,
         vec![
-            column(Axis::Mx, "-Fz_model", ctx.lever_force(Axis::Fz, -1.0)),
-            column(Axis::Mz, "Fx_model", ctx.lever_force(Axis::Fx, 1.0)),
+            column(Axis::Mx, "-Fz_model", force(Axis::Fz, -1.0)),
+            column(Axis::Mz, "Fx_model", force(Axis::Fx, 1.0)),
         ],
         -1.0,
         Signal::P,
     );
     let parameters = vec![displacement("cg_dx", dx), displacement("cg_dy", dy)];
-    vec![Candidate::new(
-        Kind::CgOffset,
-        Role::Mechanism,
-        "CG offset",
-        PHYSICS,
-        parameters,
-    )]
+    Candidate::new(Kind::CgOffset, Role::Mechanism, name, PHYSICS, parameters)
+        .form_of(Kind::CgOffset)
 }
 
 /// The lever-arm columns `lever` of one offset component with, on every axis, the base

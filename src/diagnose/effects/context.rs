@@ -98,8 +98,9 @@ impl CandidateContext<'_> {
         p.air_density * std::f64::consts::PI * p.rotor_radius.powi(2)
     }
 
-    /// Terms of rotor `i`'s thrust T̂_i (N) from the base estimates, each multiplied by
-    /// `extra` signals and `scale`. With `rate`, the terms of dT̂_i/dΩ_i · Ω̇_i (N/s).
+    /// Terms of rotor `i`'s thrust T̂_i (N) with F_z's own estimates
+    /// ([`Self::thrust_theta`]), each multiplied by `extra` signals and `scale`. With
+    /// `rate`, the terms of dT̂_i/dΩ_i · Ω̇_i (N/s), with the joint estimates.
     pub(super) fn rotor_thrust(
         &self,
         i: usize,
@@ -114,14 +115,16 @@ impl CandidateContext<'_> {
         let (w, w2, wd) = rotor_signals(i);
         let k = self.k() * scale;
         let mut t = if rate {
-            // d/dt of the Ω-dependent terms: 2Ω Ω̇ and Ω̇.
+            // d/dt of the Ω-dependent terms: 2Ω Ω̇ and Ω̇, with the joint estimates: F_z
+            // alone splits the thrust among its terms in Ω² and Ω (collinear there) at
+            // will, and the slope dT/dΩ depends on that split.
             vec![
-                term(2.0 * k * self.thrust_theta("C_T0") * r * r, &[w, wd]),
-                term(-k * self.thrust_theta("C_T_mu0") * r * nu0, &[wd]),
-                term(-k * self.thrust_theta("C_T_mu") * r, &[Vh, wd]),
-                term(k * self.thrust_theta("C_T_muw") * r, &[W, wd]),
-                term(k * self.thrust_theta("C_T_muw") * r * rotor.y, &[P, wd]),
-                term(-k * self.thrust_theta("C_T_muw") * r * rotor.x, &[Q, wd]),
+                term(2.0 * k * self.theta("C_T0") * r * r, &[w, wd]),
+                term(-k * self.theta("C_T_mu0") * r * nu0, &[wd]),
+                term(-k * self.theta("C_T_mu") * r, &[Vh, wd]),
+                term(k * self.theta("C_T_muw") * r, &[W, wd]),
+                term(k * self.theta("C_T_muw") * r * rotor.y, &[P, wd]),
+                term(-k * self.theta("C_T_muw") * r * rotor.x, &[Q, wd]),
             ]
         } else {
             vec![

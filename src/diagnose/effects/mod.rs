@@ -122,6 +122,7 @@ mod tests {
             "weak rotor 3",
             "weak rotor 4",
             "CG offset",
+            "CG offset, joint lever force",
             "in-plane force lever arm",
             "rotor-wake interaction",
             "rotor-wake interaction, advance ratio",
