@@ -660,9 +660,9 @@ fn diagnosis_on_an_imu_only_flight_finds_a_cg_offset() {
             .unwrap()
     };
     let (dx, dy) = (final_estimate("cg_dx"), final_estimate("cg_dy"));
-    // In the adopted model, within 10 % (measured 9.57 mm and −7.56 mm; when the offset
-    // was added 8.9 mm and −5.9 mm: it entered after the in-plane force lever arm and
-    // before the linear vertical airframe drag, which share its moments' data).
+    // In the adopted model, within 10 % (measured 9.57 mm and −7.67 mm; 9.50 mm and
+    // −7.56 mm when it was added, first, in the form with the forces' own fit; before
+    // that form it entered after the in-plane force lever arm at 8.9 mm and −5.9 mm).
     assert!((dx - 0.010).abs() < 0.001, "{dx}");
     assert!((dy + 0.008).abs() < 0.0008, "{dy}");
     let (b, a) = (
