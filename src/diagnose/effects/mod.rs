@@ -204,9 +204,10 @@ mod tests {
                 assert_eq!(p.reading, reading, "{}", p.name);
             }
         }
-        // 4 rotors × 3 scales, 3 CG, 3 ground, 4 wake, vortex ring, 2 × 3 + 5 drag,
-        // delay, 3 wind, 2 bias, 3 bands × 3 trim fractions, vertical linear drag.
-        assert_eq!(ranged, 50);
+        // 4 rotors × 3 scales, 5 CG (the in-plane offset in two forms, the height),
+        // 3 ground, 4 wake, vortex ring, 2 × 3 + 5 drag, delay, 3 wind, 2 bias, 3 bands
+        // × 3 trim fractions, vertical linear drag.
+        assert_eq!(ranged, 52);
         let freed = library
             .iter()
             .filter(|c| c.kind == EffectKind::DecoupledMoments)
