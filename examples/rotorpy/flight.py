@@ -8,7 +8,7 @@ at each hub, induced inflow k_z Omega w, translational lift k_h V_h^2, parasitic
 RotorPy's own parameters where it has them (drag, flapping, wind, CG via rotor positions)
 and, for a weak rotor, by scaling one rotor's thrust in its wrench.
 
-usage: python flight.py CASE SEED OUT.csv [--noise K] [--T SECONDS]
+usage: python flight.py CASE SEED OUT.csv [--noise K] [--T SECONDS] [--surface]
 CASE: clean, drag, drag_hb, cg, weak, flap or wind. Vehicle: data/vehicles/rotorpy_hummingbird.toml.
 """
 import sys, copy
@@ -85,6 +85,31 @@ class Multisine:
         return {'x': d[0, :3], 'x_dot': d[1, :3], 'x_ddot': d[2, :3], 'x_dddot': d[3, :3],
                 'x_ddddot': d[4, :3], 'yaw': d[0, 3], 'yaw_dot': d[1, 3], 'yaw_ddot': d[2, 3]}
 
+
+if '--surface' in sys.argv:
+    # A response-surface set instead of a flight: 3000 random states and rotor speeds,
+    # the wrench of each (no dynamics, no controller), t numbering the rows.
+    veh = Truth(truth, control_abstraction='cmd_motor_speeds', aero=True)
+    hover = np.sqrt(nominal['mass'] * 9.81 / 4 / nominal['k_eta'])
+    rows = []
+    for k in range(3000):
+        vb = rng.uniform([-8, -8, -3], [8, 8, 3])
+        w = rng.uniform([-3, -3, -1.5], [3, 3, 1.5])
+        om = hover * rng.uniform(0.75, 1.3, 4)
+        q = Rotation.from_euler('xyz', rng.uniform([-0.5, -0.5, -np.pi], [0.5, 0.5, np.pi])).as_quat()
+        R = Rotation.from_quat(q).as_matrix()
+        air = vb - R.T @ wind
+        F, M = veh.compute_body_wrench(w, om, air)
+        Rn = np.array([[0, 1, 0], [1, 0, 0], [0, 0, -1]]) @ R @ np.diag([1, -1, -1])
+        qn = Rotation.from_matrix(Rn).as_quat()
+        n = lambda s, size=None: noise_k * rng.normal(scale=s, size=size)
+        rows.append([k, vb[0], -vb[1], -vb[2], w[0], -w[1], -w[2], *(om + n(0.5, 4)),
+                     F[0] + n(0.03), -F[1] + n(0.03), -F[2] + n(0.03),
+                     M[0] + n(0.0015), -M[1] + n(0.0015), -M[2] + n(0.0015), qn[3], qn[0], qn[1], qn[2]])
+    hdr = 't,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz,qw,qx,qy,qz'
+    np.savetxt(out, np.array(rows), delimiter=',', header=hdr, comments='', fmt='%.7g')
+    print(f'{out}: response surface, 3000 points, weak={weak}')
+    sys.exit(0)
 
 traj = Multisine()
 ctrl = SE3Control(nominal)
