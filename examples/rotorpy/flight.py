@@ -23,6 +23,13 @@ noise_k = float(sys.argv[sys.argv.index('--noise') + 1]) if '--noise' in sys.arg
 T = float(sys.argv[sys.argv.index('--T') + 1]) if '--T' in sys.argv else 60.0
 rate = 200.0
 rng = np.random.default_rng(seed)
+# White noise (times --noise) on velocity m/s, rates rad/s, rotor speeds rad/s, force N,
+# moment N m.
+SIG = dict(v=0.02, w=0.005, om=0.5, f=0.03, m=0.0015)
+HEADER = 't,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz,qw,qx,qy,qz'
+# ENU from NED axes (and back): swap x and y, flip z.
+ENU_NED = np.array([[0, 1, 0], [1, 0, 0], [0, 0, -1]])
+FLU_FRD = np.diag([1, -1, -1])
 
 nominal = copy.deepcopy(HB)
 nominal['c_Dx'] = nominal['c_Dy'] = nominal['c_Dz'] = 0.0  # clean airframe
@@ -55,8 +62,6 @@ class Truth(Multirotor):
         i, s = weak
         # thrust of rotor i scaled by s: the same wrench with that rotor's k_eta and k_h scaled
         F, M = super().compute_body_wrench(body_rates, rotor_speeds, body_airspeed_vector)
-        w = np.zeros_like(rotor_speeds)
-        w[i] = rotor_speeds[i]
         la = body_airspeed_vector + np.cross(body_rates, self.rotor_geometry[i])
         Ti = self.k_eta * rotor_speeds[i] ** 2 + self.k_h * (la[0] ** 2 + la[1] ** 2)
         dF = np.array([0, 0, (s - 1) * Ti])
@@ -86,11 +91,31 @@ class Multisine:
                 'x_ddddot': d[4, :3], 'yaw': d[0, 3], 'yaw_dot': d[1, 3], 'yaw_ddot': d[2, 3]}
 
 
+def noise(sigma, size=None):
+    return noise_k * rng.normal(scale=sigma, size=size)
+
+
+def row(t, v, w, omega, F, M, R):
+    """A contract row from RotorPy's body FLU velocity v, rates w, rotor speeds, wrench
+    and body(FLU)->world(ENU) rotation R, with the sensors' noise: FRD flips y and z,
+    the attitude is body(FRD)->NED."""
+    v, w, F, M = (FLU_FRD @ x for x in (v, w, F, M))
+    q = Rotation.from_matrix(ENU_NED @ R @ FLU_FRD).as_quat()  # x y z w
+    return [t, *(v + noise(SIG['v'], 3)), *(w + noise(SIG['w'], 3)),
+            *(omega + noise(SIG['om'], 4)), *(F + noise(SIG['f'], 3)), *(M + noise(SIG['m'], 3)),
+            q[3], q[0], q[1], q[2]]
+
+
+def write(rows):
+    np.savetxt(out, np.array(rows), delimiter=',', header=HEADER, comments='', fmt='%.7g')
+
+
+hover = np.sqrt(nominal['mass'] * 9.81 / 4 / nominal['k_eta'])
+
 if '--surface' in sys.argv:
     # A response-surface set instead of a flight: 3000 random states and rotor speeds,
     # the wrench of each (no dynamics, no controller), t numbering the rows.
     veh = Truth(truth, control_abstraction='cmd_motor_speeds', aero=True)
-    hover = np.sqrt(nominal['mass'] * 9.81 / 4 / nominal['k_eta'])
     rows = []
     for k in range(3000):
         vb = rng.uniform([-8, -8, -3], [8, 8, 3])
@@ -100,20 +125,13 @@ if '--surface' in sys.argv:
         R = Rotation.from_quat(q).as_matrix()
         air = vb - R.T @ wind
         F, M = veh.compute_body_wrench(w, om, air)
-        Rn = np.array([[0, 1, 0], [1, 0, 0], [0, 0, -1]]) @ R @ np.diag([1, -1, -1])
-        qn = Rotation.from_matrix(Rn).as_quat()
-        n = lambda s, size=None: noise_k * rng.normal(scale=s, size=size)
-        rows.append([k, vb[0], -vb[1], -vb[2], w[0], -w[1], -w[2], *(om + n(0.5, 4)),
-                     F[0] + n(0.03), -F[1] + n(0.03), -F[2] + n(0.03),
-                     M[0] + n(0.0015), -M[1] + n(0.0015), -M[2] + n(0.0015), qn[3], qn[0], qn[1], qn[2]])
-    hdr = 't,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz,qw,qx,qy,qz'
-    np.savetxt(out, np.array(rows), delimiter=',', header=hdr, comments='', fmt='%.7g')
+        rows.append(row(k, vb, w, om, F, M, R))
+    write(rows)
     print(f'{out}: response surface, 3000 points, weak={weak}')
     sys.exit(0)
 
 traj = Multisine()
 ctrl = SE3Control(nominal)
-hover = np.sqrt(nominal['mass'] * 9.81 / 4 / nominal['k_eta'])
 f0 = traj.update(0.0)
 state = {'x': np.zeros(3), 'v': f0['x_dot'].copy(), 'q': Rotation.from_euler('z', f0['yaw']).as_quat(),
          'w': np.zeros(3), 'wind': wind.copy(), 'rotor_speeds': hover * np.ones(4)}
@@ -123,26 +141,15 @@ ex = [(rng.uniform(0.3, 6.0) * 2 * np.pi, rng.uniform(0, 2 * np.pi), j) for j in
 
 dt = 1 / rate
 rows = []
-sig = dict(v=0.02, w=0.005, om=0.5, f=0.03, m=0.0015)
 for k in range(int((T + 2) * rate)):
     t = k * dt
     st = state
-    record = t >= 2.0  # the first 2 s settle the start's transient
     R = Rotation.from_quat(st['q']).as_matrix()
     vb = R.T @ (st['v'] - wind)  # air-relative in body FLU
     vg = R.T @ st['v']           # what a user logs: ground velocity in body axes
     F, M = veh.compute_body_wrench(st['w'], st['rotor_speeds'], vb)
-    qx, qy, qz, qw = st['q']
-    # FLU -> FRD: y and z flip. Attitude body(FRD)->NED from body(FLU)->ENU.
-    Rfrd_ned = np.array([[0, 1, 0], [1, 0, 0], [0, 0, -1]]) @ R @ np.diag([1, -1, -1])
-    qn = Rotation.from_matrix(Rfrd_ned).as_quat()  # x y z w
-    n = lambda s, size=None: noise_k * rng.normal(scale=s, size=size)
-    if record: rows.append([t - 2.0, vg[0] + n(sig['v']), -vg[1] + n(sig['v']), -vg[2] + n(sig['v']),
-                 st['w'][0] + n(sig['w']), -st['w'][1] + n(sig['w']), -st['w'][2] + n(sig['w']),
-                 *(st['rotor_speeds'] + n(sig['om'], 4)),
-                 F[0] + n(sig['f']), -F[1] + n(sig['f']), -F[2] + n(sig['f']),
-                 M[0] + n(sig['m']), -M[1] + n(sig['m']), -M[2] + n(sig['m']),
-                 qn[3], qn[0], qn[1], qn[2]])
+    if t >= 2.0:  # the first 2 s settle the start's transient
+        rows.append(row(t - 2.0, vg, st['w'], st['rotor_speeds'], F, M, R))
     flat = traj.update(t)
     u = ctrl.update(t, st, flat)
     cmd = u['cmd_motor_speeds'] + sum(0.04 * hover / 6 * np.sin(f * t + ph) * np.eye(4)[j] for f, ph, j in ex)
@@ -150,8 +157,7 @@ for k in range(int((T + 2) * rate)):
     if not np.all(np.isfinite(state['x'])) or np.linalg.norm(state['x'] - flat['x']) > 5:
         raise SystemExit(f'diverged at t={t:.2f}')
 
-hdr = 't,u,v,w,p,q,r,omega_1,omega_2,omega_3,omega_4,fx,fy,fz,mx,my,mz,qw,qx,qy,qz'
-np.savetxt(out, np.array(rows), delimiter=',', header=hdr, comments='', fmt='%.7g')
+write(rows)
 a = np.array(rows)
 sp = np.linalg.norm(a[:, 1:4], axis=1)
 print(f'{out}: {len(rows)} rows, speed max {sp.max():.1f} mean {sp.mean():.1f} m/s, '

@@ -34,8 +34,8 @@ pub enum EffectKind {
     RotorSpeedDelay,
     /// In-plane rotor velocity from the yaw rate (dropped by Assumption 4).
     YawRateDrag,
-    /// Eq. 22's terms in the in-plane airspeed taken at each yawing hub's own (the
-    /// edgewise thrust and the H-force's airspeed term; dropped by Assumption 4).
+    /// Eq. 22c's edgewise thrust taken at each yawing hub's own in-plane airspeed
+    /// (dropped by Assumption 4).
     YawRateHubAirspeed,
     /// In-plane hub velocity from the roll and pitch rates at hub height.
     RollPitchRateDrag,

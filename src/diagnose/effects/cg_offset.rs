@@ -28,11 +28,11 @@ const PHYSICS: &str = "With the CG at (dx, dy) from the reference point, the thr
 /// terms that extrapolate worse (a PX4 log's future M_x R² 48 against 82). The
 /// held-out data choose.
 pub(super) fn candidates(ctx: &CandidateContext) -> Vec<Candidate> {
-    let own = |axis, scale| ctx.lever_force(axis, scale);
-    let joint = |axis, scale| ctx.model_force(axis, scale);
     vec![
-        form(ctx, "CG offset", &own),
-        form(ctx, "CG offset, joint lever force", &joint),
+        form(ctx, "CG offset", &|a, s| ctx.lever_force(a, s)),
+        form(ctx, "CG offset, joint lever force", &|a, s| {
+            ctx.model_force(a, s)
+        }),
     ]
 }
 

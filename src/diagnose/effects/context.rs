@@ -310,7 +310,7 @@ impl CandidateContext<'_> {
     /// coefficients between F_z and the moments (C_T0 on δ²t, δ²a, δ²e), so there the
     /// joint F̂ misses the force the offset multiplies (RotorPy's hummingbird with a
     /// 17 mm CG offset: joint Ĉ_T0 −0.0135 against 0.0139 without it, F_z R² 19 %
-    /// against 87 %), and an offset fitted on it comes out 8 % short.
+    /// against 87 %), and an offset fitted on it comes out 7.6 % short.
     pub(super) fn lever_force(&self, axis: Axis, scale: f64) -> Vec<Term> {
         self.force_terms(axis, scale, |j| self.force_theta[j])
     }
